@@ -1,0 +1,1 @@
+//! Wavefront OBJ/MTL geometry through tobj. PLACEHOLDER.

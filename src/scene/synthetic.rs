@@ -1,0 +1,1 @@
+//! Generated test and benchmark scenes built in code. PLACEHOLDER.
