@@ -108,3 +108,134 @@ impl Scene {
         (lo, hi)
     }
 }
+
+/// Geometry in the model frame (Z up, +Y = model north, metres), before conversion.
+#[derive(Clone, Debug, Default)]
+pub struct ModelInput {
+    /// Triangles in the model frame (Z up). Use [`y_up_to_z_up`] first for Y-up files.
+    pub triangles: Vec<Triangle>,
+    /// Materials referenced by triangles.
+    pub materials: Vec<Material>,
+    /// Group names referenced by triangles.
+    pub groups: Vec<String>,
+    /// Sensors as (position, direction) in the model frame (Z up).
+    pub sensors: Vec<(DVec3, DVec3)>,
+    /// Rotation from the model's +Y to true north, degrees clockwise seen from above.
+    pub north_deg: f64,
+    /// The site.
+    pub site: Site,
+    /// Ground reflectance, [0, 1).
+    pub ground_reflectance: f64,
+}
+
+/// Converts a Y-up point to Z-up: (x, y, z) → (x, −z, y) (glTF/Blender convention).
+pub fn y_up_to_z_up(p: DVec3) -> DVec3 {
+    DVec3::new(p.x, -p.z, p.y)
+}
+
+impl Scene {
+    /// Builds a scene from model-frame input: rotates model north onto true north, moves
+    /// the origin to the centre of the bounds (so coordinates far from the origin keep
+    /// precision), drops zero-area triangles (counted) and checks that everything is finite.
+    ///
+    /// # Errors
+    /// [`crate::Error::Input`] for non-finite coordinates, a zero sensor direction, a
+    /// material index out of range, or a ground reflectance outside [0, 1).
+    pub fn from_model(path: &Path, input: ModelInput) -> Result<Scene> {
+        use crate::error::Error;
+        if !(0.0..1.0).contains(&input.ground_reflectance) {
+            return Err(Error::input(
+                path,
+                None,
+                Some(&input.ground_reflectance.to_string()),
+                "ground_reflectance must be in [0, 1)",
+            ));
+        }
+        if !input.north_deg.is_finite() {
+            return Err(Error::input(
+                path,
+                None,
+                Some(&input.north_deg.to_string()),
+                "north_deg must be finite",
+            ));
+        }
+        let (s, c) = input.north_deg.to_radians().sin_cos();
+        // Counter-clockwise by north_deg maps the model's north (clockwise from +Y) onto +Y.
+        let rot = |p: DVec3| DVec3::new(c * p.x - s * p.y, s * p.x + c * p.y, p.z);
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for (i, t) in input.triangles.iter().enumerate() {
+            if (t.material as usize) >= input.materials.len() {
+                return Err(Error::Internal(format!(
+                    "triangle {i} refers to material {} of {}",
+                    t.material,
+                    input.materials.len()
+                )));
+            }
+            for v in t.v {
+                if !v.is_finite() {
+                    return Err(Error::input(
+                        path,
+                        None,
+                        Some(&format!("{v}")),
+                        format!("triangle {i} has a non-finite vertex"),
+                    ));
+                }
+                let w = rot(v);
+                lo = lo.min(w);
+                hi = hi.max(w);
+            }
+        }
+        let origin = if input.triangles.is_empty() {
+            DVec3::ZERO
+        } else {
+            ((lo + hi) * 0.5).round()
+        };
+        let mut dropped = 0;
+        let triangles: Vec<Triangle> = input
+            .triangles
+            .iter()
+            .filter_map(|t| {
+                let moved = Triangle {
+                    v: t.v.map(|v| rot(v) - origin),
+                    ..*t
+                };
+                let n = moved.cross();
+                if n.length_squared() > 0.0 && n.is_finite() {
+                    Some(moved)
+                } else {
+                    dropped += 1;
+                    None
+                }
+            })
+            .collect();
+        let mut sensors = Vec::with_capacity(input.sensors.len());
+        for (k, (p, d)) in input.sensors.iter().enumerate() {
+            if !p.is_finite() || !d.is_finite() || d.length_squared() == 0.0 {
+                return Err(Error::input(
+                    path,
+                    Some(k + 1),
+                    Some(&format!("{p} {d}")),
+                    "sensor needs a finite position and a non-zero finite direction",
+                ));
+            }
+            sensors.push(Sensor {
+                position: rot(*p) - origin,
+                normal: rot(*d).normalize(),
+                input_position: *p,
+            });
+        }
+        Ok(Scene {
+            path: path.to_path_buf(),
+            triangles,
+            materials: input.materials,
+            groups: input.groups,
+            sensors,
+            site: input.site,
+            ground_reflectance: input.ground_reflectance,
+            origin,
+            dropped_degenerate: dropped,
+            warnings: Vec::new(),
+        })
+    }
+}
