@@ -1,1 +1,177 @@
-//! PLACEHOLDER
+//! L3 the patch hierarchy: every input triangle is the root of a quadtree of elements made
+//! by 4-way midpoint subdivision. An element is addressed by an exact key (triangle, path),
+//! so refinements found for different sources (and cached) merge into one hierarchy.
+
+use crate::scene::Scene;
+use glam::DVec3;
+use std::collections::HashMap;
+
+/// Exact address of an element: input triangle and heap-encoded quadtree path (1 = the
+/// triangle itself, child k of p is 4p + k, children in [`split`] order).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ElementKey {
+    /// Index of the input triangle.
+    pub tri: u32,
+    /// Heap-encoded path.
+    pub path: u64,
+}
+
+/// Deepest subdivision representable by a path (2 bits per level in 64 bits).
+pub const MAX_DEPTH: u32 = 30;
+
+impl ElementKey {
+    /// The input triangle itself.
+    pub fn root(tri: u32) -> Self {
+        ElementKey { tri, path: 1 }
+    }
+    /// Subdivision depth (0 for an input triangle).
+    pub fn depth(&self) -> u32 {
+        (63 - self.path.leading_zeros()) / 2
+    }
+    /// Child `k` (0..4).
+    pub fn child(&self, k: u8) -> Self {
+        ElementKey {
+            tri: self.tri,
+            path: self.path * 4 + k as u64,
+        }
+    }
+    /// Parent, or `None` at the root.
+    pub fn parent(&self) -> Option<Self> {
+        (self.path > 1).then(|| ElementKey {
+            tri: self.tri,
+            path: self.path / 4,
+        })
+    }
+    /// Vertices of the element (scene frame), from the root triangle's vertices.
+    pub fn vertices(&self, root: [DVec3; 3]) -> [DVec3; 3] {
+        let mut t = root;
+        for level in (0..self.depth()).rev() {
+            t = split(t)[((self.path >> (2 * level)) & 3) as usize];
+        }
+        t
+    }
+}
+
+/// 4-way midpoint split: corners at v0, v1, v2, then the middle triangle (same orientation).
+pub fn split(v: [DVec3; 3]) -> [[DVec3; 3]; 4] {
+    let m01 = (v[0] + v[1]) * 0.5;
+    let m12 = (v[1] + v[2]) * 0.5;
+    let m20 = (v[2] + v[0]) * 0.5;
+    [
+        [v[0], m01, m20],
+        [m01, v[1], m12],
+        [m20, m12, v[2]],
+        [m01, m12, m20],
+    ]
+}
+
+/// One element of the arena.
+#[derive(Clone, Debug)]
+pub struct Element {
+    /// Its key.
+    pub key: ElementKey,
+    /// Vertices, scene frame (m).
+    pub vertices: [DVec3; 3],
+    /// Area, m².
+    pub area: f64,
+    /// Index of the parent element.
+    pub parent: Option<u32>,
+    /// Index of the first of four consecutive children, if split.
+    pub first_child: Option<u32>,
+}
+
+/// The union of refinements: an arena of elements, roots first (index = triangle index).
+#[derive(Clone, Debug, Default)]
+pub struct Hierarchy {
+    /// All elements; `elements[t]` is the root of triangle `t`.
+    pub elements: Vec<Element>,
+    index: HashMap<ElementKey, u32>,
+}
+
+impl Hierarchy {
+    /// The unrefined hierarchy: one element per input triangle.
+    pub fn new(scene: &Scene) -> Hierarchy {
+        let elements: Vec<Element> = scene
+            .triangles
+            .iter()
+            .enumerate()
+            .map(|(i, t)| Element {
+                key: ElementKey::root(i as u32),
+                vertices: t.v,
+                area: t.area(),
+                parent: None,
+                first_child: None,
+            })
+            .collect();
+        let index = elements
+            .iter()
+            .enumerate()
+            .map(|(i, e)| (e.key, i as u32))
+            .collect();
+        Hierarchy { elements, index }
+    }
+
+    /// Index of the element with `key`, splitting ancestors as needed.
+    pub fn insert(&mut self, key: ElementKey) -> u32 {
+        if let Some(&i) = self.index.get(&key) {
+            return i;
+        }
+        let parent = self.insert(key.parent().expect("roots exist from construction"));
+        let first = self.elements.len() as u32;
+        let pv = self.elements[parent as usize].vertices;
+        for (k, v) in split(pv).into_iter().enumerate() {
+            let ck = self.elements[parent as usize].key.child(k as u8);
+            let area = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
+            self.elements.push(Element {
+                key: ck,
+                vertices: v,
+                area,
+                parent: Some(parent),
+                first_child: None,
+            });
+            self.index.insert(ck, first + k as u32);
+        }
+        self.elements[parent as usize].first_child = Some(first);
+        self.index[&key]
+    }
+
+    /// Index of `key` if present.
+    pub fn get(&self, key: ElementKey) -> Option<u32> {
+        self.index.get(&key).copied()
+    }
+
+    /// Indices of all leaves (elements without children), in arena order.
+    pub fn leaves(&self) -> impl Iterator<Item = u32> + '_ {
+        self.elements
+            .iter()
+            .enumerate()
+            .filter(|(_, e)| e.first_child.is_none())
+            .map(|(i, _)| i as u32)
+    }
+
+    /// Number of leaves.
+    pub fn leaf_count(&self) -> usize {
+        self.leaves().count()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn split_preserves_area_and_keys_address_children() {
+        let v = [DVec3::ZERO, DVec3::new(2.0, 0.0, 0.0), DVec3::new(0.0, 1.0, 0.0)];
+        let kids = split(v);
+        let area = |t: &[DVec3; 3]| 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length();
+        let sum: f64 = kids.iter().map(area).sum();
+        assert!((sum - area(&v)).abs() < 1e-15);
+        // Every child keeps the parent's orientation.
+        let n = (v[1] - v[0]).cross(v[2] - v[0]);
+        assert!(kids.iter().all(|t| (t[1] - t[0]).cross(t[2] - t[0]).dot(n) > 0.0));
+        let k = ElementKey::root(7).child(3).child(1);
+        assert_eq!(k.depth(), 2);
+        assert_eq!(k.vertices(v), split(split(v)[3])[1]);
+        assert_eq!(k.parent().unwrap().parent().unwrap(), ElementKey::root(7));
+    }
+}

@@ -91,3 +91,61 @@ mod tests {
         assert!((brute - exact).abs() / exact < 1e-5, "{brute} vs {exact}");
     }
 }
+
+/// Clips a spherical polygon (unit vertices, great-arc edges) to the hemisphere
+/// `n·ω ≥ 0`. The horizon is a great circle, so the result again has great-arc edges.
+pub fn clip_to_hemisphere(poly: &[DVec3], n: DVec3) -> Vec<DVec3> {
+    let mut out = Vec::with_capacity(poly.len() + 2);
+    for k in 0..poly.len() {
+        let a = poly[k];
+        let b = poly[(k + 1) % poly.len()];
+        let (sa, sb) = (n.dot(a), n.dot(b));
+        if sa >= 0.0 {
+            out.push(a);
+        }
+        if (sa > 0.0 && sb < 0.0) || (sa < 0.0 && sb > 0.0) {
+            // Positive combination of a and b with n·x = 0: on the minor arc from a to b.
+            let x = if sa > 0.0 { b * sa - a * sb } else { a * sb - b * sa };
+            out.push(x.normalize());
+        }
+    }
+    out
+}
+
+/// Projected solid angle (sr) of a spherical polygon lying in `n·ω ≥ 0`, by Lambert's
+/// contour formula (see [`projected_solid_angle`]).
+pub fn projected_solid_angle_polygon(poly: &[DVec3], n: DVec3) -> f64 {
+    let mut sum = 0.0;
+    for k in 0..poly.len() {
+        let (p, q) = (poly[k], poly[(k + 1) % poly.len()]);
+        let x = p.cross(q);
+        let len = x.length();
+        if len > 1e-300 {
+            sum += len.atan2(p.dot(q)) * n.dot(x) / len;
+        }
+    }
+    (0.5 * sum).abs()
+}
+
+#[cfg(test)]
+mod clip_tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    #[test]
+    fn vertical_receiver_sees_half_of_the_sky_faces() {
+        // A vertical receiver facing +x sees the sky half of its hemisphere: π/2.
+        let n = DVec3::X;
+        let faces = [
+            [DVec3::X, DVec3::Y, DVec3::Z],
+            [DVec3::Y, DVec3::NEG_X, DVec3::Z],
+            [DVec3::NEG_X, DVec3::NEG_Y, DVec3::Z],
+            [DVec3::NEG_Y, DVec3::X, DVec3::Z],
+        ];
+        let total: f64 = faces
+            .iter()
+            .map(|f| projected_solid_angle_polygon(&clip_to_hemisphere(f, n), n))
+            .sum();
+        assert!((total - PI / 2.0).abs() < 1e-12, "{total}");
+    }
+}

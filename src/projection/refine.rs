@@ -1,0 +1,128 @@
+//! Visibility ratio and quad-tree refinement (Besuievsky & Martín §5.2–5.3).
+//!
+//! For a patch, n_p counts the pixels it is projected into (at any depth) and n_v those in
+//! which light reaches it (it is first along the line, or only glazing lies in front:
+//! transmitted visibility). A patch with V_min < VR = n_v/n_p < V_max is split into four
+//! children, which are scan-converted over the same pixels and take their parent's place
+//! there (here: the child looks up its triangle's fragment in each pixel it covers, which
+//! is exactly the exchanged entry). Refinement stops at the minimum area, the maximum
+//! depth, or when a patch's projection is smaller than a pixel. A leaf's transfer weight
+//! is (Ap/A)·Σt/n_p = cos θ · (mean transmission over its pixels).
+
+use super::{DirectionRecord, LeafWeight, Ldi, ProjectionParams, ProjectionScene};
+use crate::hierarchy::{split, ElementKey, MAX_DEPTH};
+use crate::math::raster;
+use crate::photometry::Rgb;
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// Coverage of one patch in the LDI.
+#[derive(Clone, Copy, Debug, Default)]
+struct Coverage {
+    n_p: u32,
+    n_v: u32,
+    t_sum: Rgb,
+}
+
+fn coverage(ldi: &Ldi, tri: u32, v: &[DVec3; 3]) -> Coverage {
+    let cam = &ldi.camera;
+    let p = v.map(|x| cam.to_pixel(x));
+    let h = v.map(|x| cam.height_of(x));
+    let mut c = Coverage::default();
+    raster::rasterize(p, h, cam.width, cam.height, |i, j, z| {
+        let t = match ldi.pixel(i, j).iter().find(|f| f.tri == tri) {
+            Some(f) => Rgb::new(f.t_in[0] as f64, f.t_in[1] as f64, f.t_in[2] as f64),
+            // Rounding at the midpoints can put a child's sample just outside its
+            // triangle's own samples; fall back to the line itself.
+            None => ldi.transmission_at(i, j, z, tri),
+        };
+        c.n_p += 1;
+        if t.max_element() > 0.0 {
+            c.n_v += 1;
+        }
+        c.t_sum += t;
+    });
+    c
+}
+
+/// Transmission at a single point (for patches too small to cover a pixel centre).
+fn point_transmission(ldi: &Ldi, tri: u32, v: &[DVec3; 3]) -> Rgb {
+    let cam = &ldi.camera;
+    let c = (v[0] + v[1] + v[2]) / 3.0;
+    let q = cam.to_pixel(c);
+    let i = (q.x.floor().max(0.0) as u32).min(cam.width - 1);
+    let j = (q.y.floor().max(0.0) as u32).min(cam.height - 1);
+    ldi.transmission_at(i, j, cam.height_of(c), tri)
+}
+
+/// Refines one input triangle; pushes its lit leaves. Returns (tested, split).
+fn refine_triangle(
+    scene: &ProjectionScene,
+    ldi: &Ldi,
+    params: &ProjectionParams,
+    tri: u32,
+    out: &mut Vec<LeafWeight>,
+) -> (u64, u64) {
+    let dir = ldi.camera.dir;
+    let cos = scene.normals[tri as usize].dot(dir);
+    if cos <= 0.0 || cos.is_nan() {
+        return (0, 0); // faces away: receives nothing from this source
+    }
+    let glazing = scene.glazing_tf[tri as usize].max_element() > 0.0;
+    let pixel_area = ldi.camera.pixel * ldi.camera.pixel;
+    let max_depth = params.max_depth.min(MAX_DEPTH);
+    let (mut tested, mut splits) = (0, 0);
+    let mut stack = vec![(ElementKey::root(tri), scene.vertices[tri as usize])];
+    while let Some((key, v)) = stack.pop() {
+        tested += 1;
+        let area = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
+        let c = coverage(ldi, tri, &v);
+        let t_mean = if c.n_p == 0 {
+            point_transmission(ldi, tri, &v)
+        } else {
+            let vr = c.n_v as f64 / c.n_p as f64;
+            let refine = !glazing
+                && vr > params.v_min
+                && vr < params.v_max
+                && area > params.min_area_m2
+                && area * cos > pixel_area
+                && key.depth() < max_depth;
+            if refine {
+                splits += 1;
+                let kids = split(v);
+                for k in (0..4).rev() {
+                    stack.push((key.child(k as u8), kids[k]));
+                }
+                continue;
+            }
+            c.t_sum / c.n_p as f64
+        };
+        let weight = t_mean * cos;
+        if weight.max_element() > 0.0 {
+            out.push(LeafWeight { key, weight });
+        }
+    }
+    (tested, splits)
+}
+
+/// Refines every input triangle against `ldi` and returns the lit leaves in key order.
+pub fn refine_all(scene: &ProjectionScene, ldi: &Ldi, params: &ProjectionParams) -> DirectionRecord {
+    let parts: Vec<(Vec<LeafWeight>, u64, u64)> = (0..scene.vertices.len() as u32)
+        .into_par_iter()
+        .with_min_len(64)
+        .map(|tri| {
+            let mut leaves = Vec::new();
+            let (t, s) = refine_triangle(scene, ldi, params, tri, &mut leaves);
+            (leaves, t, s)
+        })
+        .collect();
+    let mut record = DirectionRecord::default();
+    for (mut leaves, t, s) in parts {
+        leaves.sort_unstable_by_key(|l| l.key.path);
+        record.leaves.append(&mut leaves);
+        record.stats.elements_tested += t;
+        record.stats.elements_split += s;
+    }
+    record.stats.lit_leaves = record.leaves.len() as u64;
+    record
+}
