@@ -40,12 +40,19 @@ impl<'a> Visibility<'a> {
     /// Transmission (per channel) from `origin` to infinity along unit `dir`: glazing
     /// multiplies by τ(θ), an opaque surface stops the light.
     pub fn transmission(&self, origin: DVec3, dir: DVec3) -> Rgb {
+        self.transmission_for(origin, dir, dir)
+    }
+
+    /// As [`Self::transmission`], with the glazing's angle of incidence taken from
+    /// `incidence` instead of `dir` (the sun: visibility follows the snapped direction, the
+    /// glass sees the true one).
+    pub fn transmission_for(&self, origin: DVec3, dir: DVec3, incidence: DVec3) -> Rgb {
         let mut t = Rgb::ONE;
         self.bvh.hits_in_order(origin, dir, T_MIN_M, f64::INFINITY, |hit| {
             let tri = &self.scene.triangles[hit.triangle as usize];
             let m = &self.scene.materials[tri.material as usize];
             if m.is_glazing() {
-                t *= m.transmittance(self.normals[hit.triangle as usize].dot(dir).abs());
+                t *= m.transmittance(self.normals[hit.triangle as usize].dot(incidence).abs());
                 t.max_element() > 0.0
             } else {
                 t = Rgb::ZERO;
@@ -141,7 +148,9 @@ pub fn sensor_direct(
                 let cos = n.dot(s.true_direction);
                 if cos > 0.0 {
                     out.rays += 1;
-                    out.sun += s.normal_irradiance * vis.transmission(p, s.direction) * cos;
+                    out.sun += s.normal_irradiance
+                        * vis.transmission_for(p, s.direction, s.true_direction)
+                        * cos;
                 }
             }
         }

@@ -1,1 +1,8 @@
-//! integration tests
+//! daystep's one integration-test binary (one binary links faster on 2-core CI).
+
+mod util; // scene builders in code, closed-form helpers, assert helpers
+
+mod cli; // the binary end to end: exit codes, messages naming file:line, outputs
+mod extremes; // low sun, polar day and night, turbidity limits, slivers, far coordinates
+mod layers; // the layer rule of lib.rs: lower layers never import higher ones
+mod physics; // closed-form daylight: unobstructed skies, roof opening, sun footprint, glazing

@@ -1,5 +1,196 @@
-//! PLACEHOLDER
-/// Runs the command line; returns the exit code.
+//! L9 the command line: clap arguments → validated library calls → exit code
+//! (0 success, 1 bad input, 2 internal error).
+
+use crate::error::{Error, Result};
+use crate::scene::Scene;
+use crate::sequence::{self, Quality, SkySpec};
+use clap::{Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+/// daystep: incremental time-series daylight engine.
+#[derive(Parser, Debug)]
+#[command(name = "daystep", version, about, long_about = None)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+    /// Worker threads (default: all cores). Results do not depend on it.
+    #[arg(long, global = true)]
+    pub threads: Option<usize>,
+}
+
+/// Sky models for `--sky`.
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum SkyArg {
+    /// Perez all-weather sky with sun (needs --dni, --dhi).
+    Perez,
+    /// Traditional CIE overcast sky normalised to --dhi.
+    CieOvercast,
+    /// CIE standard general sky --type 1..15 normalised to --dhi, sun from --dni.
+    Cie,
+    /// Preetham clear sky with sun (--turbidity).
+    Preetham,
+    /// No daylight.
+    None,
+}
+
+/// Subcommands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Illuminance at every sensor for one instant (direct sun + sky + ground glow).
+    Instant {
+        /// The scene file (scene.toml).
+        scene: PathBuf,
+        /// Local standard time of the site, YYYY-MM-DDTHH:MM[:SS], or RFC 3339.
+        #[arg(long)]
+        time: String,
+        /// Sky model.
+        #[arg(long, value_enum)]
+        sky: SkyArg,
+        /// Direct-normal irradiance, W/m².
+        #[arg(long)]
+        dni: Option<f64>,
+        /// Diffuse-horizontal irradiance, W/m².
+        #[arg(long)]
+        dhi: Option<f64>,
+        /// CIE general sky type, 1..15.
+        #[arg(long = "type")]
+        sky_type: Option<u8>,
+        /// Preetham turbidity (2..10).
+        #[arg(long)]
+        turbidity: Option<f64>,
+        /// Dew point for the Perez luminous efficacy, °C.
+        #[arg(long)]
+        dew_point: Option<f64>,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+        /// Quality preset: draft, default, high, reference.
+        #[arg(long, default_value = "default")]
+        quality: String,
+        /// Cache folder (reserved: projection caching is not implemented yet).
+        #[arg(long)]
+        cache: Option<PathBuf>,
+        /// Random seed (reserved: the direct pipeline is deterministic without one).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+}
+
+fn need(name: &str, v: Option<f64>, sky: &str) -> Result<f64> {
+    v.ok_or_else(|| Error::arg(name, "(missing)", format!("--sky {sky} needs {name}")))
+}
+
+fn sky_spec(
+    sky: SkyArg,
+    dni: Option<f64>,
+    dhi: Option<f64>,
+    sky_type: Option<u8>,
+    turbidity: Option<f64>,
+    dew_point: Option<f64>,
+) -> Result<SkySpec> {
+    Ok(match sky {
+        SkyArg::Perez => SkySpec::Perez {
+            dni: need("--dni", dni, "perez")?,
+            dhi: need("--dhi", dhi, "perez")?,
+            dew_point_c: dew_point,
+        },
+        SkyArg::CieOvercast => SkySpec::CieOvercast {
+            dhi: need("--dhi", dhi, "cie-overcast")?,
+        },
+        SkyArg::Cie => SkySpec::Cie {
+            sky_type: sky_type
+                .ok_or_else(|| Error::arg("--type", "(missing)", "--sky cie needs --type 1..15"))?,
+            dhi: need("--dhi", dhi, "cie")?,
+            dni: dni.unwrap_or(0.0),
+        },
+        SkyArg::Preetham => SkySpec::Preetham {
+            turbidity: need("--turbidity", turbidity, "preetham")?,
+        },
+        SkyArg::None => SkySpec::None,
+    })
+}
+
+/// Runs a parsed command line.
+///
+/// # Errors
+/// Any library error, to be mapped to an exit code.
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Instant {
+            scene,
+            time,
+            sky,
+            dni,
+            dhi,
+            sky_type,
+            turbidity,
+            dew_point,
+            out,
+            quality,
+            cache,
+            seed: _,
+        } => {
+            let q = Quality::preset(&quality).ok_or_else(|| {
+                Error::arg("--quality", &quality, "expected draft, default, high or reference")
+            })?;
+            let spec = sky_spec(sky, dni, dhi, sky_type, turbidity, dew_point)?;
+            let scene = Scene::load(&scene)?;
+            for w in &scene.warnings {
+                eprintln!("warning: {w}");
+            }
+            let (utc, local) = crate::site::parse_time(&time, scene.site.utc_offset_h)?;
+            let mut result = sequence::run_instant(&scene, utc, local, &spec, &q)?;
+            if cache.is_some() {
+                result
+                    .report
+                    .warnings
+                    .push("--cache given, but projection caching is not implemented yet".into());
+            }
+            sequence::write_instant(&scene, &result, &out)?;
+            for w in &result.report.warnings {
+                eprintln!("warning: {w}");
+            }
+            let r = &result.report;
+            eprintln!(
+                "daystep instant: {} sensors, {} sources ({} sky, {} ground, {} sun), {} → {} elements, {:.3} s; max lux_err {:.1} lx; wrote {}",
+                r.counts.sensors,
+                r.counts.sky_sources + r.counts.ground_sources + r.counts.sun_sources,
+                r.counts.sky_sources,
+                r.counts.ground_sources,
+                r.counts.sun_sources,
+                r.counts.elements_before,
+                r.counts.elements_after,
+                r.total_seconds,
+                r.max_lux_err,
+                out.display()
+            );
+            Ok(())
+        }
+    }
+}
+
+/// Parses the process arguments, runs, and returns the exit code.
 pub fn main() -> i32 {
-    0
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let code = if e.use_stderr() { 1 } else { 0 };
+            let _ = e.print();
+            return code;
+        }
+    };
+    if let Some(n) = cli.threads {
+        if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build_global() {
+            eprintln!("error: cannot set up {n} threads: {e}");
+            return 2;
+        }
+    }
+    match run(cli) {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("error: {e}");
+            e.exit_code()
+        }
+    }
 }

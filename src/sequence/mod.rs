@@ -1,1 +1,10 @@
-//! PLACEHOLDER
+//! L8 orchestration: the one place that knows the whole order of the pipeline. A single
+//! instant is a sequence of one step.
+
+pub mod config;
+pub mod instant;
+pub mod report;
+
+pub use config::{Quality, SkySpec};
+pub use instant::{run_instant, write_instant, InstantResult, SensorValue};
+pub use report::Report;

@@ -37,3 +37,48 @@ pub fn direction_from_alt_az(altitude_deg: f64, azimuth_deg: f64) -> DVec3 {
     let (alt, az) = (altitude_deg.to_radians(), azimuth_deg.to_radians());
     DVec3::new(alt.cos() * az.sin(), alt.cos() * az.cos(), alt.sin())
 }
+
+/// Parses an instant: local standard time of the site `YYYY-MM-DDTHH:MM[:SS]` (the site's
+/// UTC offset applies; no daylight-saving time), or RFC 3339 with an explicit offset.
+/// Returns the instant in UTC and the local standard date-time.
+///
+/// # Errors
+/// [`crate::Error::Input`] naming the argument and the value.
+pub fn parse_time(
+    text: &str,
+    utc_offset_h: f64,
+) -> crate::Result<(chrono::DateTime<chrono::Utc>, chrono::NaiveDateTime)> {
+    use chrono::{DateTime, NaiveDateTime, TimeDelta};
+    let offset = TimeDelta::milliseconds((utc_offset_h * 3_600_000.0).round() as i64);
+    if let Ok(t) = DateTime::parse_from_rfc3339(text) {
+        let utc = t.with_timezone(&chrono::Utc);
+        return Ok((utc, utc.naive_utc() + offset));
+    }
+    for fmt in ["%Y-%m-%dT%H:%M:%S", "%Y-%m-%dT%H:%M", "%Y-%m-%d %H:%M:%S", "%Y-%m-%d %H:%M"] {
+        if let Ok(local) = NaiveDateTime::parse_from_str(text, fmt) {
+            return Ok(((local - offset).and_utc(), local));
+        }
+    }
+    Err(crate::Error::arg(
+        "--time",
+        text,
+        "expected local standard time YYYY-MM-DDTHH:MM[:SS] or RFC 3339 with an offset",
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use chrono::{Datelike, Timelike};
+
+    #[test]
+    fn local_and_rfc3339_times() {
+        let (utc, local) = parse_time("2024-06-21T12:00", -5.0).unwrap();
+        assert_eq!(utc.hour(), 17);
+        assert_eq!(local.hour(), 12);
+        let (utc, local) = parse_time("2024-06-21T12:00:00+02:00", -5.0).unwrap();
+        assert_eq!(utc.hour(), 10);
+        assert_eq!((local.day(), local.hour()), (21, 5));
+        assert!(parse_time("21/06/2024", 0.0).is_err());
+    }
+}

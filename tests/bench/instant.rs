@@ -1,1 +1,109 @@
-fn main(){}
+//! Benchmark of one instant (`cargo bench --bench instant`): per-stage times (medians of
+//! several runs), peak memory, and error against run time for each quality preset against
+//! the `reference` preset, on the sample office and a generated 10 000-triangle building.
+//! It prints figures; nothing here asserts a time.
+
+use daystep::scene::{synthetic, Scene};
+use daystep::sequence::{run_instant, InstantResult, Quality, SkySpec};
+use daystep::site::parse_time;
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::Instant;
+
+fn peak_rss_mb() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
+        })
+        .map_or(f64::NAN, |kb| kb / 1024.0)
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn once(scene: &Scene, spec: &SkySpec, q: &Quality) -> (InstantResult, f64) {
+    let (utc, local) = parse_time("2024-06-21T15:00", scene.site.utc_offset_h).unwrap();
+    let t0 = Instant::now();
+    let r = run_instant(scene, utc, local, spec, q).unwrap();
+    (r, t0.elapsed().as_secs_f64())
+}
+
+fn bench_scene(name: &str, scene: &Scene, runs: usize) {
+    let spec = SkySpec::Perez { dni: 750.0, dhi: 110.0, dew_point_c: None };
+    println!("\n## {name}: {} triangles, {} sensors", scene.triangles.len(), scene.sensors.len());
+    let q = Quality::default();
+    let mut stages: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    let mut totals = Vec::new();
+    let mut last = None;
+    for _ in 0..runs {
+        let (r, t) = once(scene, &spec, &q);
+        for (k, v) in &r.report.stage_seconds.0 {
+            stages.entry(k.clone()).or_default().push(*v);
+        }
+        totals.push(t);
+        last = Some(r);
+    }
+    let r = last.unwrap();
+    let c = &r.report.counts;
+    println!(
+        "default quality, median of {runs}: total {:.3} s; sources {} sky + {} ground + {} sun; LDI pixels {} fragments {} (largest {}x{}); elements {} -> {} (sun alone {}); sensor rays {}",
+        median(totals), c.sky_sources, c.ground_sources, c.sun_sources, c.ldi_pixels, c.ldi_fragments,
+        c.ldi_max_size.0, c.ldi_max_size.1, c.elements_before, c.elements_after, c.elements_after_sun, c.sensor_rays
+    );
+    println!("| stage | median s |\n|---|---|");
+    for (k, v) in stages {
+        println!("| {k} | {:.4} |", median(v));
+    }
+    let shoot: f64 = ["sources", "projection", "transfer"]
+        .iter()
+        .filter_map(|s| r.report.stage_seconds.0.iter().find(|(k, _)| k == s).map(|(_, t)| *t))
+        .sum();
+    println!("sun + sky shoot (sources + projection + transfer), last run: {shoot:.3} s; peak RSS so far {:.0} MB", peak_rss_mb());
+
+    // Error against time: each preset against `reference`.
+    let (reference, t_ref) = once(scene, &spec, &Quality::preset("reference").unwrap());
+    println!("\n| preset | seconds | mean |err| vs reference (lux) | mean rel. err | max rel. err | mean stated lux_err | stated covers actual |\n|---|---|---|---|---|---|---|");
+    for p in ["draft", "default", "high"] {
+        let (r, t) = once(scene, &spec, &Quality::preset(p).unwrap());
+        let mut abs = 0.0;
+        let mut rel = Vec::new();
+        let mut stated = 0.0;
+        let mut covered = 0;
+        for (a, b) in r.sensors.iter().zip(&reference.sensors) {
+            let e = (a.lux - b.lux).abs();
+            abs += e;
+            stated += a.lux_err;
+            covered += usize::from(a.lux_err + b.lux_err >= e);
+            if b.lux > 10.0 {
+                rel.push(e / b.lux);
+            }
+        }
+        let n = r.sensors.len().max(1) as f64;
+        let max_rel = rel.iter().cloned().fold(0.0, f64::max);
+        let mean_rel = rel.iter().sum::<f64>() / rel.len().max(1) as f64;
+        println!(
+            "| {p} | {t:.3} | {:.1} | {:.3}% | {:.2}% | {:.1} | {:.0}% |",
+            abs / n,
+            100.0 * mean_rel,
+            100.0 * max_rel,
+            stated / n,
+            100.0 * covered as f64 / n
+        );
+    }
+    println!("| reference | {t_ref:.3} | 0 | 0 | 0 | {:.1} | - |", reference.sensors.iter().map(|s| s.lux_err).sum::<f64>() / reference.sensors.len().max(1) as f64);
+    println!("peak RSS after {name}: {:.0} MB", peak_rss_mb());
+}
+
+fn main() {
+    let threads = rayon::current_num_threads();
+    println!("# daystep instant benchmark ({threads} threads)");
+    let office = Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office/scene.toml")).unwrap();
+    bench_scene("sample office", &office, 7);
+    let building = synthetic::multi_storey_building(10_000);
+    bench_scene("generated building", &building, 3);
+}

@@ -1,0 +1,152 @@
+//! Run configuration: the sky of an instant and the quality presets that set every knob
+//! trading error against time.
+
+use crate::projection::ProjectionParams;
+use crate::sensors::SensorParams;
+use crate::sources::SkyParams;
+use serde::{Deserialize, Serialize};
+
+/// Which sky to build for an instant (INTERFACE.md `--sky`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "model", rename_all = "kebab-case")]
+pub enum SkySpec {
+    /// Perez all-weather sky with sun from direct-normal and diffuse-horizontal irradiance.
+    Perez {
+        /// Direct-normal irradiance, W/m².
+        dni: f64,
+        /// Diffuse-horizontal irradiance, W/m².
+        dhi: f64,
+        /// Dew point, °C (sets precipitable water in the luminous efficacy).
+        dew_point_c: Option<f64>,
+    },
+    /// Traditional CIE overcast sky (Moon–Spencer), horizontal irradiance = `dhi`, no sun.
+    CieOvercast {
+        /// Diffuse-horizontal irradiance, W/m².
+        dhi: f64,
+    },
+    /// CIE standard general sky type 1..=15 normalised to `dhi`, with sun when `dni` > 0.
+    Cie {
+        /// Sky type 1..=15.
+        sky_type: u8,
+        /// Diffuse-horizontal irradiance, W/m².
+        dhi: f64,
+        /// Direct-normal irradiance, W/m².
+        dni: f64,
+    },
+    /// Preetham clear sky with sun, absolute luminance.
+    Preetham {
+        /// Atmospheric turbidity (valid 2..10).
+        turbidity: f64,
+    },
+    /// No daylight.
+    None,
+}
+
+/// Every knob of a run, grouped by pipeline step.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Quality {
+    /// Preset name this came from.
+    pub name: &'static str,
+    /// Sky subdivision.
+    pub sky: SkyParams,
+    /// Sun snapping grid spacing, degrees.
+    pub sun_spacing_deg: f64,
+    /// LDI and refinement.
+    pub projection: ProjectionParams,
+    /// Sensor gather.
+    pub sensors: SensorParams,
+}
+
+impl Quality {
+    /// A preset by name: `draft`, `default`, `high`, `reference`.
+    pub fn preset(name: &str) -> Option<Quality> {
+        let base = Quality {
+            name: "default",
+            sky: SkyParams::default(),
+            sun_spacing_deg: 0.25,
+            projection: ProjectionParams::default(),
+            sensors: SensorParams::default(),
+        };
+        let q = match name {
+            "default" => base,
+            "draft" => Quality {
+                name: "draft",
+                sky: SkyParams {
+                    min_depth: 1,
+                    max_depth: 3,
+                    ..base.sky
+                },
+                sun_spacing_deg: 1.0,
+                projection: ProjectionParams {
+                    max_resolution: 256,
+                    min_resolution: 32,
+                    ..base.projection
+                },
+                sensors: SensorParams {
+                    visibility_depth: 2,
+                },
+            },
+            "high" => Quality {
+                name: "high",
+                sky: SkyParams {
+                    min_depth: 3,
+                    max_depth: 6,
+                    min_solid_angle_sr: 5e-4,
+                    max_irradiance_fraction: 0.004,
+                    ground_depth: 2,
+                    ..base.sky
+                },
+                sun_spacing_deg: 0.1,
+                projection: ProjectionParams {
+                    max_resolution: 2048,
+                    min_resolution: 128,
+                    ..base.projection
+                },
+                sensors: SensorParams {
+                    visibility_depth: 5,
+                },
+            },
+            "reference" => Quality {
+                name: "reference",
+                sky: SkyParams {
+                    min_depth: 4,
+                    max_depth: 7,
+                    min_solid_angle_sr: 1e-4,
+                    max_irradiance_fraction: 0.001,
+                    ground_depth: 3,
+                    ..base.sky
+                },
+                sun_spacing_deg: 0.05,
+                projection: ProjectionParams {
+                    max_resolution: 4096,
+                    min_resolution: 256,
+                    ..base.projection
+                },
+                sensors: SensorParams {
+                    visibility_depth: 6,
+                },
+            },
+            _ => return None,
+        };
+        Some(q)
+    }
+
+    /// The same run one level coarser in every knob that affects sensors: the reference
+    /// for the discretisation-error estimate.
+    pub fn coarser(&self) -> Quality {
+        Quality {
+            sky: self.sky.coarser(),
+            sun_spacing_deg: self.sun_spacing_deg * 2.0,
+            sensors: SensorParams {
+                visibility_depth: self.sensors.visibility_depth.saturating_sub(1),
+            },
+            ..*self
+        }
+    }
+}
+
+impl Default for Quality {
+    fn default() -> Self {
+        Quality::preset("default").expect("default preset exists")
+    }
+}

@@ -1,0 +1,112 @@
+//! The run report (`report.json`): stage times, counts, what was skipped and why.
+
+use serde::Serialize;
+use std::time::Instant;
+
+/// Wall time of each pipeline stage, seconds, in the order they ran.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct StageTimes(pub Vec<(String, f64)>);
+
+impl StageTimes {
+    /// Runs `f`, recording its wall time under `name`.
+    pub fn time<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
+        let t0 = Instant::now();
+        let r = f();
+        self.0.push((name.to_owned(), t0.elapsed().as_secs_f64()));
+        r
+    }
+    /// Sum of all stages, seconds.
+    pub fn total(&self) -> f64 {
+        self.0.iter().map(|(_, t)| t).sum()
+    }
+}
+
+/// Sun details of an instant.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct SunReport {
+    /// Apparent altitude, degrees.
+    pub altitude_deg: f64,
+    /// Azimuth clockwise from north, degrees.
+    pub azimuth_deg: f64,
+    /// Whether the sun was used as a source.
+    pub used: bool,
+    /// Angle between the true and the snapped sun direction, degrees.
+    pub snapping_error_deg: f64,
+    /// Largest shadow-edge shift the snapping can cause across the scene, m
+    /// (scene diagonal × snapping error).
+    pub max_shadow_shift_m: f64,
+}
+
+/// Counts of one run.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Counts {
+    /// Sky-triangle sources.
+    pub sky_sources: usize,
+    /// Ground-glow sources.
+    pub ground_sources: usize,
+    /// 1 when the sun was a source.
+    pub sun_sources: usize,
+    /// Sources left out for negligible energy.
+    pub negligible_sources: usize,
+    /// LDIs built (one per source).
+    pub ldis_built: usize,
+    /// LDIs reused from a cache.
+    pub ldis_reused: usize,
+    /// Total LDI pixels.
+    pub ldi_pixels: u64,
+    /// Total LDI fragments.
+    pub ldi_fragments: u64,
+    /// Largest LDI (width × height).
+    pub ldi_max_size: (u32, u32),
+    /// Input triangles (elements before refinement).
+    pub elements_before: usize,
+    /// Leaves of the refined hierarchy (elements after refinement).
+    pub elements_after: usize,
+    /// Leaves after the sun's projection alone.
+    pub elements_after_sun: usize,
+    /// Patch splits summed over all projections.
+    pub splits: u64,
+    /// Sensors.
+    pub sensors: usize,
+    /// Rays cast for sensors (fine + coarse estimate).
+    pub sensor_rays: u64,
+    /// Zero-area input triangles dropped.
+    pub degenerate_triangles_dropped: usize,
+}
+
+/// Everything `report.json` says about a run.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Report {
+    /// daystep version.
+    pub version: String,
+    /// Command or API entry point.
+    pub command: String,
+    /// Scene file.
+    pub scene: String,
+    /// Local standard time of the instant.
+    pub time_local: String,
+    /// The instant in UTC (RFC 3339).
+    pub time_utc: String,
+    /// Sky description.
+    pub sky: String,
+    /// Quality preset name.
+    pub quality: String,
+    /// Sun details.
+    pub sun: SunReport,
+    /// Counts.
+    pub counts: Counts,
+    /// Stage wall times, seconds.
+    pub stage_seconds: StageTimes,
+    /// Total wall time, seconds.
+    pub total_seconds: f64,
+    /// Steps left out and why.
+    pub skipped: Vec<String>,
+    /// Non-fatal remarks.
+    pub warnings: Vec<String>,
+    /// How `lux_err` is estimated.
+    pub error_model: String,
+    /// Largest `lux_err` over sensors, lux.
+    pub max_lux_err: f64,
+    /// Largest `lux_err / lux` over sensors with lux > 1.
+    pub max_relative_err: f64,
+}

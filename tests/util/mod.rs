@@ -1,0 +1,146 @@
+//! Scenes built in code from closed-form geometry, and helpers to run the pipeline on them.
+
+#![allow(dead_code)]
+
+use daystep::photometry::Rgb;
+use daystep::scene::{Material, ModelInput, Scene, Triangle};
+use daystep::sequence::report::Report;
+use daystep::sequence::{instant::run_sky, InstantResult, Quality};
+use daystep::site::Site;
+use daystep::sky::{Sky, SkyDistribution, Sun};
+use glam::DVec3;
+use std::path::Path;
+
+/// A scene under construction in the model frame.
+#[derive(Default)]
+pub struct Builder {
+    pub input: ModelInput,
+}
+
+impl Builder {
+    pub fn new() -> Self {
+        let mut b = Builder::default();
+        b.input.site = Site::default();
+        b.input.ground_reflectance = 0.0;
+        b
+    }
+    pub fn material(&mut self, name: &str, kd: f64, tf: f64) -> u32 {
+        self.input.materials.push(Material {
+            name: name.into(),
+            kd: Rgb::splat(kd),
+            tf: Rgb::splat(tf),
+            ke: Rgb::ZERO,
+        });
+        self.input.materials.len() as u32 - 1
+    }
+    /// A planar quad a, b, c, d counter-clockwise seen from its front.
+    pub fn quad(&mut self, q: [DVec3; 4], material: u32) {
+        for t in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
+            self.input.triangles.push(Triangle {
+                v: t,
+                material,
+                group: 0,
+            });
+        }
+    }
+    /// Horizontal rectangle [x0,x1]×[y0,y1] at height z facing up (+z) or down.
+    pub fn hrect(&mut self, x0: f64, x1: f64, y0: f64, y1: f64, z: f64, up: bool, m: u32) {
+        let q = [
+            DVec3::new(x0, y0, z),
+            DVec3::new(x1, y0, z),
+            DVec3::new(x1, y1, z),
+            DVec3::new(x0, y1, z),
+        ];
+        if up {
+            self.quad(q, m)
+        } else {
+            self.quad([q[0], q[3], q[2], q[1]], m)
+        }
+    }
+    /// Horizontal rectangle with a rectangular hole (4 rectangles around it).
+    pub fn hrect_with_hole(
+        &mut self,
+        outer: (f64, f64, f64, f64),
+        hole: (f64, f64, f64, f64),
+        z: f64,
+        up: bool,
+        m: u32,
+    ) {
+        let (x0, x1, y0, y1) = outer;
+        let (hx0, hx1, hy0, hy1) = hole;
+        self.hrect(x0, x1, y0, hy0, z, up, m);
+        self.hrect(x0, x1, hy1, y1, z, up, m);
+        self.hrect(x0, hx0, hy0, hy1, z, up, m);
+        self.hrect(hx1, x1, hy0, hy1, z, up, m);
+    }
+    /// Four vertical walls of the box [x0,x1]×[y0,y1]×[z0,z1], facing inwards.
+    pub fn walls_inward(&mut self, x0: f64, x1: f64, y0: f64, y1: f64, z0: f64, z1: f64, m: u32) {
+        let p = |x, y, z| DVec3::new(x, y, z);
+        self.quad([p(x0, y0, z0), p(x0, y0, z1), p(x1, y0, z1), p(x1, y0, z0)], m); // south, +y
+        self.quad([p(x1, y1, z0), p(x1, y1, z1), p(x0, y1, z1), p(x0, y1, z0)], m); // north, -y
+        self.quad([p(x0, y1, z0), p(x0, y1, z1), p(x0, y0, z1), p(x0, y0, z0)], m); // west, +x
+        self.quad([p(x1, y0, z0), p(x1, y0, z1), p(x1, y1, z1), p(x1, y1, z0)], m); // east, -x
+    }
+    pub fn sensor(&mut self, p: DVec3, n: DVec3) {
+        self.input.sensors.push((p, n));
+    }
+    pub fn build(self) -> Scene {
+        Scene::from_model(Path::new("<test>"), self.input).expect("test scene is valid")
+    }
+}
+
+/// A sky with a given distribution and optional sun, ground glow as given.
+pub fn sky_of(dist: Option<Box<dyn SkyDistribution>>, sun: Option<Sun>, ground: f64) -> Sky {
+    Sky {
+        distribution: dist,
+        sun,
+        ground_radiance: Rgb::splat(ground),
+        description: "test".into(),
+        warnings: vec![],
+    }
+}
+
+/// Uniform sky of radiance `l` (W·sr⁻¹·m⁻², white).
+pub struct Uniform(pub f64);
+impl SkyDistribution for Uniform {
+    fn radiance(&self, _: DVec3) -> Rgb {
+        Rgb::splat(self.0)
+    }
+}
+
+/// Moon–Spencer overcast: L = L_z (1 + 2 cos Z)/3.
+pub struct MoonSpencer(pub f64);
+impl SkyDistribution for MoonSpencer {
+    fn radiance(&self, d: DVec3) -> Rgb {
+        Rgb::splat(self.0 * (1.0 + 2.0 * d.z) / 3.0)
+    }
+}
+
+pub fn run(scene: &Scene, sky: &Sky, quality: &Quality) -> InstantResult {
+    let mut report = Report::default();
+    run_sky(scene, sky, quality, &mut report)
+}
+
+/// Illuminance (lux) of a white irradiance of `w` W/m².
+pub fn lux_of(w: f64) -> f64 {
+    179.0 * w
+}
+
+/// Asserts |actual − expected| ≤ tol, printing all three.
+#[track_caller]
+pub fn assert_close(what: &str, actual: f64, expected: f64, tol: f64) {
+    assert!(
+        (actual - expected).abs() <= tol,
+        "{what}: actual {actual}, expected {expected}, tolerance {tol}, error {}",
+        (actual - expected).abs()
+    );
+}
+
+/// Configuration factor of a parallel rectangle a × b at height h with one corner above
+/// the point (validation_cases.md §2.2).
+pub fn f_parallel(a: f64, b: f64, h: f64) -> f64 {
+    let (x, y) = (a / h, b / h);
+    let sx = (1.0 + x * x).sqrt();
+    let sy = (1.0 + y * y).sqrt();
+    (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * std::f64::consts::PI)
+}
