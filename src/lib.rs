@@ -32,8 +32,8 @@ pub mod math; // frames, spherical triangles, rasteriser, BVH, counter-based RNG
 pub mod photometry; // RGB ↔ lux at 179 lm/W
 
 // L1 inputs
-pub mod site; // site, solar position
-pub mod scene; // scene.toml, OBJ/MTL, .pts, generated scenes
+pub mod scene;
+pub mod site; // site, solar position // scene.toml, OBJ/MTL, .pts, generated scenes
 
 // L2 light
 pub mod sky; // sky radiance models and the sun

@@ -48,17 +48,18 @@ impl<'a> Visibility<'a> {
     /// glass sees the true one).
     pub fn transmission_for(&self, origin: DVec3, dir: DVec3, incidence: DVec3) -> Rgb {
         let mut t = Rgb::ONE;
-        self.bvh.hits_in_order(origin, dir, T_MIN_M, f64::INFINITY, |hit| {
-            let tri = &self.scene.triangles[hit.triangle as usize];
-            let m = &self.scene.materials[tri.material as usize];
-            if m.is_glazing() {
-                t *= m.transmittance(self.normals[hit.triangle as usize].dot(incidence).abs());
-                t.max_element() > 0.0
-            } else {
-                t = Rgb::ZERO;
-                false
-            }
-        });
+        self.bvh
+            .hits_in_order(origin, dir, T_MIN_M, f64::INFINITY, |hit| {
+                let tri = &self.scene.triangles[hit.triangle as usize];
+                let m = &self.scene.materials[tri.material as usize];
+                if m.is_glazing() {
+                    t *= m.transmittance(self.normals[hit.triangle as usize].dot(incidence).abs());
+                    t.max_element() > 0.0
+                } else {
+                    t = Rgb::ZERO;
+                    false
+                }
+            });
         t
     }
 }

@@ -39,19 +39,33 @@ fn instant_on_the_sample_office_writes_sensors_and_report() {
     assert!(o.status.success(), "{}", stderr(&o));
     let csv = std::fs::read_to_string(out.join("sensors.csv")).unwrap();
     let mut lines = csv.lines();
-    assert!(lines.next().unwrap().starts_with("sensor,x,y,z,lux,lux_err"));
+    assert!(lines
+        .next()
+        .unwrap()
+        .starts_with("sensor,x,y,z,lux,lux_err"));
     let rows: Vec<Vec<f64>> = lines
         .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
         .collect();
     let pts = std::fs::read_to_string(office().with_file_name("office.pts")).unwrap();
-    let n_pts = pts.lines().filter(|l| !l.trim().is_empty() && !l.starts_with('#')).count();
+    let n_pts = pts
+        .lines()
+        .filter(|l| !l.trim().is_empty() && !l.starts_with('#'))
+        .count();
     assert_eq!(rows.len(), n_pts);
     // Noon at the equinox through a south window: some sensors see the sun, all see sky.
-    assert!(rows.iter().all(|r| r[4].is_finite() && r[4] > 0.0 && r[5] >= 0.0));
-    assert!(rows.iter().any(|r| r[6] > 0.0), "no sun patch on the work plane");
+    assert!(rows
+        .iter()
+        .all(|r| r[4].is_finite() && r[4] > 0.0 && r[5] >= 0.0));
+    assert!(
+        rows.iter().any(|r| r[6] > 0.0),
+        "no sun patch on the work plane"
+    );
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
-    assert!(report["counts"]["elements_after"].as_u64().unwrap() > report["counts"]["elements_before"].as_u64().unwrap());
+    assert!(
+        report["counts"]["elements_after"].as_u64().unwrap()
+            > report["counts"]["elements_before"].as_u64().unwrap()
+    );
     assert!(report["stage_seconds"].as_array().unwrap().len() >= 5);
 }
 
@@ -62,8 +76,20 @@ fn results_do_not_depend_on_the_thread_count() {
     for threads in ["1", "2"] {
         let out = dir.path().join(threads);
         let o = daystep(&[
-            "--threads", threads, "instant", office().to_str().unwrap(), "--time", "2024-06-21T15:00", "--sky",
-            "preetham", "--turbidity", "3", "--out", out.to_str().unwrap(), "--quality", "draft",
+            "--threads",
+            threads,
+            "instant",
+            office().to_str().unwrap(),
+            "--time",
+            "2024-06-21T15:00",
+            "--sky",
+            "preetham",
+            "--turbidity",
+            "3",
+            "--out",
+            out.to_str().unwrap(),
+            "--quality",
+            "draft",
         ]);
         assert!(o.status.success(), "{}", stderr(&o));
         outputs.push(std::fs::read(out.join("sensors.csv")).unwrap());
@@ -75,35 +101,76 @@ fn results_do_not_depend_on_the_thread_count() {
 fn bad_input_exits_1_naming_the_file_line_and_value() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    std::fs::write(d.join("scene.toml"), "geometry = \"m.obj\"\n[site]\nlatitude = 40\nlongitude = 0\nutc_offset_h = 0\n").unwrap();
+    std::fs::write(
+        d.join("scene.toml"),
+        "geometry = \"m.obj\"\n[site]\nlatitude = 40\nlongitude = 0\nutc_offset_h = 0\n",
+    )
+    .unwrap();
     std::fs::write(d.join("m.mtl"), "newmtl a\nKd 0.5 0.5 0.5\n").unwrap();
-    std::fs::write(d.join("m.obj"), "mtllib m.mtl\nv 0 0 0\nv 1 0 nan\nv 0 1 0\nusemtl a\nf 1 2 3\n").unwrap();
+    std::fs::write(
+        d.join("m.obj"),
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 nan\nv 0 1 0\nusemtl a\nf 1 2 3\n",
+    )
+    .unwrap();
     let scene = d.join("scene.toml");
     let args = |s: &Path| {
         vec![
-            "instant".to_string(), s.to_string_lossy().into_owned(), "--time".into(), "2024-06-21T12:00".into(),
-            "--sky".into(), "cie-overcast".into(), "--dhi".into(), "100".into(), "--out".into(),
+            "instant".to_string(),
+            s.to_string_lossy().into_owned(),
+            "--time".into(),
+            "2024-06-21T12:00".into(),
+            "--sky".into(),
+            "cie-overcast".into(),
+            "--dhi".into(),
+            "100".into(),
+            "--out".into(),
             d.join("out").to_string_lossy().into_owned(),
         ]
     };
     let run = |a: Vec<String>| daystep(&a.iter().map(String::as_str).collect::<Vec<_>>());
     let o = run(args(&scene));
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(stderr(&o).contains("m.obj:3") && stderr(&o).to_lowercase().contains("nan"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("m.obj:3") && stderr(&o).to_lowercase().contains("nan"),
+        "{}",
+        stderr(&o)
+    );
 
     let o = run(args(&d.join("missing.toml")));
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("missing.toml"), "{}", stderr(&o));
 
-    std::fs::write(d.join("m.obj"), "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n").unwrap();
+    std::fs::write(
+        d.join("m.obj"),
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n",
+    )
+    .unwrap();
     std::fs::write(d.join("m.mtl"), "newmtl a\nKd 1.0 0.5 0.5\n").unwrap();
     let o = run(args(&scene));
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("m.mtl:2"), "{}", stderr(&o));
 
-    let o = daystep(&["instant", scene.to_str().unwrap(), "--time", "noon", "--sky", "none", "--out", "x"]);
+    let o = daystep(&[
+        "instant",
+        scene.to_str().unwrap(),
+        "--time",
+        "noon",
+        "--sky",
+        "none",
+        "--out",
+        "x",
+    ]);
     assert_eq!(o.status.code(), Some(1));
-    let o = daystep(&["instant", scene.to_str().unwrap(), "--time", "2024-01-01T12:00", "--sky", "perez", "--out", "x"]);
+    let o = daystep(&[
+        "instant",
+        scene.to_str().unwrap(),
+        "--time",
+        "2024-01-01T12:00",
+        "--sky",
+        "perez",
+        "--out",
+        "x",
+    ]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("--dni"), "{}", stderr(&o));
 }

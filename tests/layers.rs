@@ -21,7 +21,11 @@ fn layer_of(module: &str) -> Option<u32> {
 }
 
 /// Same-layer uses the table allows: (user, used).
-const SIBLINGS: &[(&str, &str)] = &[("scene", "site"), ("sources", "sky"), ("sensors", "radiosity")];
+const SIBLINGS: &[(&str, &str)] = &[
+    ("scene", "site"),
+    ("sources", "sky"),
+    ("sensors", "radiosity"),
+];
 
 fn visit(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
     for e in std::fs::read_dir(dir).unwrap() {
@@ -43,24 +47,48 @@ fn lower_layers_never_use_higher_ones() {
     let mut checked: HashMap<String, usize> = HashMap::new();
     for f in files {
         let rel = f.strip_prefix(&src).unwrap();
-        let first = rel.components().next().unwrap().as_os_str().to_string_lossy();
+        let first = rel
+            .components()
+            .next()
+            .unwrap()
+            .as_os_str()
+            .to_string_lossy();
         let module = first.trim_end_matches(".rs").to_string();
-        let Some(own) = layer_of(&module) else { continue };
+        let Some(own) = layer_of(&module) else {
+            continue;
+        };
         let text = std::fs::read_to_string(&f).unwrap();
         for (n, line) in text.lines().enumerate() {
             let mut rest = line;
             while let Some(i) = rest.find("crate::") {
                 rest = &rest[i + 7..];
-                let used: String = rest.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+                let used: String = rest
+                    .chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect();
                 *checked.entry(module.clone()).or_default() += 1;
                 let Some(l) = layer_of(&used) else { continue };
-                let ok = used == module || l < own || SIBLINGS.contains(&(module.as_str(), used.as_str()));
+                let ok = used == module
+                    || l < own
+                    || SIBLINGS.contains(&(module.as_str(), used.as_str()));
                 if !ok {
-                    violations.push(format!("{}:{}: {module} (L{own}) uses {used} (L{l}): {}", rel.display(), n + 1, line.trim()));
+                    violations.push(format!(
+                        "{}:{}: {module} (L{own}) uses {used} (L{l}): {}",
+                        rel.display(),
+                        n + 1,
+                        line.trim()
+                    ));
                 }
             }
         }
     }
-    assert!(checked.len() > 5, "the test saw too few modules: {checked:?}");
-    assert!(violations.is_empty(), "layer violations:\n{}", violations.join("\n"));
+    assert!(
+        checked.len() > 5,
+        "the test saw too few modules: {checked:?}"
+    );
+    assert!(
+        violations.is_empty(),
+        "layer violations:\n{}",
+        violations.join("\n")
+    );
 }

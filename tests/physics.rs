@@ -20,10 +20,19 @@ fn open_sensors() -> daystep::scene::Scene {
 fn uniform_sky_gives_pi_l_and_half_for_vertical() {
     let (l, lg) = (10.0, 3.0);
     let scene = open_sensors();
-    let r = run(&scene, &sky_of(Some(Box::new(Uniform(l))), None, lg), &Quality::default());
+    let r = run(
+        &scene,
+        &sky_of(Some(Box::new(Uniform(l))), None, lg),
+        &Quality::default(),
+    );
     let s = &r.sensors;
     // Horizontal: π L. Vertical: half the sky and half the ground, π/2 each.
-    assert_close("horizontal", s[0].lux, lux_of(PI * l), 1e-9 * lux_of(PI * l));
+    assert_close(
+        "horizontal",
+        s[0].lux,
+        lux_of(PI * l),
+        1e-9 * lux_of(PI * l),
+    );
     let vert = lux_of(PI / 2.0 * (l + lg));
     assert_close("vertical", s[1].lux, vert, 1e-9 * vert);
     // Tilted β = 45°: sky view (1 + cos β)/2, ground view (1 − cos β)/2 of π.
@@ -36,11 +45,20 @@ fn uniform_sky_gives_pi_l_and_half_for_vertical() {
 fn moon_spencer_overcast_gives_seven_ninths_pi_lz() {
     let lz = 20.0;
     let scene = open_sensors();
-    let r = run(&scene, &sky_of(Some(Box::new(MoonSpencer(lz))), None, 0.0), &Quality::default());
+    let r = run(
+        &scene,
+        &sky_of(Some(Box::new(MoonSpencer(lz))), None, 0.0),
+        &Quality::default(),
+    );
     let expected = lux_of(7.0 / 9.0 * PI * lz);
     let got = r.sensors[0];
     assert_close("overcast horizontal", got.lux, expected, 0.01 * expected);
-    assert!(got.lux_err >= (got.lux - expected).abs(), "lux_err {} does not cover {}", got.lux_err, (got.lux - expected).abs());
+    assert!(
+        got.lux_err >= (got.lux - expected).abs(),
+        "lux_err {} does not cover {}",
+        got.lux_err,
+        (got.lux - expected).abs()
+    );
 }
 
 /// The CIE general sky, written here from ISO 15469's published coefficients so the test
@@ -64,9 +82,17 @@ fn cie_relative(t: usize, z: f64, az: f64, zs: f64, azs: f64) -> f64 {
         [-1.0, -0.15, 24.0, -2.8, 0.15],
     ];
     let [a, b, c, d, e] = P[t - 1];
-    let phi = |z: f64| if z.cos() <= 1e-12 { 1.0 } else { 1.0 + a * (b / z.cos()).exp() };
+    let phi = |z: f64| {
+        if z.cos() <= 1e-12 {
+            1.0
+        } else {
+            1.0 + a * (b / z.cos()).exp()
+        }
+    };
     let f = |chi: f64| 1.0 + c * ((d * chi).exp() - (d * PI / 2.0).exp()) + e * chi.cos().powi(2);
-    let chi = (zs.cos() * z.cos() + zs.sin() * z.sin() * (az - azs).cos()).clamp(-1.0, 1.0).acos();
+    let chi = (zs.cos() * z.cos() + zs.sin() * z.sin() * (az - azs).cos())
+        .clamp(-1.0, 1.0)
+        .acos();
     f(chi) * phi(z) / (f(zs) * phi(0.0))
 }
 
@@ -104,7 +130,12 @@ fn cie_general_skies_against_independent_quadrature() {
             let s = sky(CieSkyType::General(t as u8), dhi, 0.0, sun, rho_g).unwrap();
             // The published E_h/L_z fixes the zenith radiance of a sky normalised to DHI.
             let lz = s.radiance(DVec3::Z).x;
-            assert_close(&format!("type {t} alt {alt}: L_z·E_h/L_z"), lz * EH_OVER_LZ[t - 1][k], dhi, 2e-3 * dhi);
+            assert_close(
+                &format!("type {t} alt {alt}: L_z·E_h/L_z"),
+                lz * EH_OVER_LZ[t - 1][k],
+                dhi,
+                2e-3 * dhi,
+            );
             // Independent midpoint quadrature of the test's own formula, normalised to DHI.
             let (zs, azs) = ((90.0 - alt).to_radians(), az_s.to_radians());
             let (nz, na) = (300, 600);
@@ -131,8 +162,16 @@ fn cie_general_skies_against_independent_quadrature() {
                 let got = r.sensors[m];
                 let err = (got.lux - expected).abs();
                 worst = worst.max(err / expected);
-                assert!(err <= 0.01 * expected, "type {t} alt {alt} sensor {m}: {} vs {expected}", got.lux);
-                assert!(got.lux_err >= err, "type {t} alt {alt} sensor {m}: lux_err {} < error {err}", got.lux_err);
+                assert!(
+                    err <= 0.01 * expected,
+                    "type {t} alt {alt} sensor {m}: {} vs {expected}",
+                    got.lux
+                );
+                assert!(
+                    got.lux_err >= err,
+                    "type {t} alt {alt} sensor {m}: lux_err {} < error {err}",
+                    got.lux_err
+                );
             }
         }
     }
@@ -145,7 +184,13 @@ fn roof_opening_room(hole: f64, glazing: Option<f64>) -> daystep::scene::Scene {
     let black = b.material("black", 0.0, 0.0);
     b.hrect(0.0, 10.0, 0.0, 10.0, 0.0, true, black);
     let h = hole / 2.0;
-    b.hrect_with_hole((0.0, 10.0, 0.0, 10.0), (5.0 - h, 5.0 + h, 5.0 - h, 5.0 + h), 3.0, false, black);
+    b.hrect_with_hole(
+        (0.0, 10.0, 0.0, 10.0),
+        (5.0 - h, 5.0 + h, 5.0 - h, 5.0 + h),
+        3.0,
+        false,
+        black,
+    );
     b.walls_inward(0.0, 10.0, 0.0, 10.0, 0.0, 3.0, black);
     if let Some(tf) = glazing {
         let g = b.material("glass", 0.0, tf);
@@ -166,15 +211,39 @@ fn sky_component_under_roof_opening() {
     let r = run(&scene, &sky_of(Some(Box::new(Uniform(l))), None, 0.0), &q);
     let expected = lux_of(PI * l * f);
     let got = r.sensors[0];
-    assert_close("uniform sky through 1x1 m opening", got.lux, expected, 0.02 * expected);
-    assert!(got.lux_err >= (got.lux - expected).abs(), "lux_err {} vs error {}", got.lux_err, (got.lux - expected).abs());
+    assert_close(
+        "uniform sky through 1x1 m opening",
+        got.lux,
+        expected,
+        0.02 * expected,
+    );
+    assert!(
+        got.lux_err >= (got.lux - expected).abs(),
+        "lux_err {} vs error {}",
+        got.lux_err,
+        (got.lux - expected).abs()
+    );
     // Moon–Spencer overcast: E/L_z = 0.1065100 (validation_cases.md §2.5).
     let lz = 10.0;
-    let r = run(&scene, &sky_of(Some(Box::new(MoonSpencer(lz))), None, 0.0), &q);
+    let r = run(
+        &scene,
+        &sky_of(Some(Box::new(MoonSpencer(lz))), None, 0.0),
+        &q,
+    );
     let expected = lux_of(0.1065100 * lz);
     let got = r.sensors[0];
-    assert_close("overcast through 1x1 m opening", got.lux, expected, 0.02 * expected);
-    assert!(got.lux_err >= (got.lux - expected).abs(), "lux_err {} vs error {}", got.lux_err, (got.lux - expected).abs());
+    assert_close(
+        "overcast through 1x1 m opening",
+        got.lux,
+        expected,
+        0.02 * expected,
+    );
+    assert!(
+        got.lux_err >= (got.lux - expected).abs(),
+        "lux_err {} vs error {}",
+        got.lux_err,
+        (got.lux - expected).abs()
+    );
 }
 
 fn sun_only(alt: f64, az: f64, dni: f64) -> daystep::sky::Sky {
@@ -207,7 +276,11 @@ fn sun_through_roof_opening_lights_its_footprint_and_refines_its_edge() {
     let (alt, az, dni) = (55.0, 200.0, 800.0);
     let q = Quality::default();
     let r = run(&scene, &sun_only(alt, az, dni), &q);
-    let sun = r.sources.iter().find(|s| s.is_sun()).expect("sun is a source");
+    let sun = r
+        .sources
+        .iter()
+        .find(|s| s.is_sun())
+        .expect("sun is a source");
     let d = sun.direction; // snapped: visibility follows it
     let cos_true = daystep::site::direction_from_alt_az(alt, az).z;
     let h = hole / 2.0;
@@ -226,7 +299,12 @@ fn sun_through_roof_opening_lights_its_footprint_and_refines_its_edge() {
         }
         let expected = if m < 0.0 { lux_of(dni * cos_true) } else { 0.0 };
         lit += usize::from(m < 0.0);
-        assert_close(&format!("sensor {k} at {p}"), r.sensors[k].lux, expected, 1e-9 * lux_of(dni));
+        assert_close(
+            &format!("sensor {k} at {p}"),
+            r.sensors[k].lux,
+            expected,
+            1e-9 * lux_of(dni),
+        );
     }
     // The footprint is hole² / 0.0625 m² per sensor ≈ 64 sensors.
     assert!((50..80).contains(&lit), "{lit} lit sensors");
@@ -249,7 +327,9 @@ fn sun_through_roof_opening_lights_its_footprint_and_refines_its_edge() {
             far.1 += e.area;
         }
         // Irradiance: full inside, zero outside, for leaves clear of the edge.
-        let span = (e.vertices[1] - e.vertices[0]).length().max((e.vertices[2] - e.vertices[0]).length());
+        let span = (e.vertices[1] - e.vertices[0])
+            .length()
+            .max((e.vertices[2] - e.vertices[0]).length());
         let e_sun = r.direct.sun[i as usize].x;
         if in_hole(c) < -span {
             assert_close("lit leaf", e_sun, dni * d.z, 1e-6 * dni);
@@ -259,15 +339,30 @@ fn sun_through_roof_opening_lights_its_footprint_and_refines_its_edge() {
     }
     let density_near = near.0 as f64 / near.1;
     let density_far = far.0 as f64 / far.1;
-    eprintln!("leaves near edge {} ({density_near:.0}/m²), far {} ({density_far:.2}/m²)", near.0, far.0);
-    assert!(near.0 > 100, "refinement along the shadow edge: {} leaves", near.0);
-    assert!(density_near > 100.0 * density_far, "{density_near} vs {density_far}");
+    eprintln!(
+        "leaves near edge {} ({density_near:.0}/m²), far {} ({density_far:.2}/m²)",
+        near.0, far.0
+    );
+    assert!(
+        near.0 > 100,
+        "refinement along the shadow edge: {} leaves",
+        near.0
+    );
+    assert!(
+        density_near > 100.0 * density_far,
+        "{density_near} vs {density_far}"
+    );
 }
 
 #[test]
 fn glazing_transmittance_follows_the_glass_formula() {
     // Published Radiance-glass transmittance for T_n = 0.88 (validation_cases.md §2.6).
-    let table = [(0.0, 0.8800), (30.0, 0.8755), (60.0, 0.7999), (80.0, 0.4235)];
+    let table = [
+        (0.0, 0.8800),
+        (30.0, 0.8755),
+        (60.0, 0.7999),
+        (80.0, 0.4235),
+    ];
     let mut b = Builder::new();
     let g = b.material("glass", 0.0, 0.88);
     b.hrect(-50.0, 50.0, -50.0, 50.0, 1.0, true, g);
@@ -275,10 +370,19 @@ fn glazing_transmittance_follows_the_glass_formula() {
     let scene = b.build();
     let dni = 500.0;
     for (zenith, tau) in table {
-        let r = run(&scene, &sun_only(90.0 - zenith, 135.0, dni), &Quality::default());
+        let r = run(
+            &scene,
+            &sun_only(90.0 - zenith, 135.0, dni),
+            &Quality::default(),
+        );
         let cos = (zenith as f64).to_radians().cos();
         let expected = lux_of(dni * cos * tau);
         // Table rounding (5e-5 in τ) is the tolerance.
-        assert_close(&format!("glazing at {zenith}°"), r.sensors[0].lux, expected, lux_of(dni * cos * 6e-5));
+        assert_close(
+            &format!("glazing at {zenith}°"),
+            r.sensors[0].lux,
+            expected,
+            lux_of(dni * cos * 6e-5),
+        );
     }
 }

@@ -132,7 +132,11 @@ pub fn run(cli: Cli) -> Result<()> {
             seed: _,
         } => {
             let q = Quality::preset(&quality).ok_or_else(|| {
-                Error::arg("--quality", &quality, "expected draft, default, high or reference")
+                Error::arg(
+                    "--quality",
+                    &quality,
+                    "expected draft, default, high or reference",
+                )
             })?;
             let spec = sky_spec(sky, dni, dhi, sky_type, turbidity, dew_point)?;
             let scene = Scene::load(&scene)?;
@@ -181,7 +185,10 @@ pub fn main() -> i32 {
         }
     };
     if let Some(n) = cli.threads {
-        if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build_global() {
+        if let Err(e) = rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global()
+        {
             eprintln!("error: cannot set up {n} threads: {e}");
             return 2;
         }

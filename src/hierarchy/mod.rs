@@ -161,14 +161,20 @@ mod tests {
 
     #[test]
     fn split_preserves_area_and_keys_address_children() {
-        let v = [DVec3::ZERO, DVec3::new(2.0, 0.0, 0.0), DVec3::new(0.0, 1.0, 0.0)];
+        let v = [
+            DVec3::ZERO,
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+        ];
         let kids = split(v);
         let area = |t: &[DVec3; 3]| 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length();
         let sum: f64 = kids.iter().map(area).sum();
         assert!((sum - area(&v)).abs() < 1e-15);
         // Every child keeps the parent's orientation.
         let n = (v[1] - v[0]).cross(v[2] - v[0]);
-        assert!(kids.iter().all(|t| (t[1] - t[0]).cross(t[2] - t[0]).dot(n) > 0.0));
+        assert!(kids
+            .iter()
+            .all(|t| (t[1] - t[0]).cross(t[2] - t[0]).dot(n) > 0.0));
         let k = ElementKey::root(7).child(3).child(1);
         assert_eq!(k.depth(), 2);
         assert_eq!(k.vertices(v), split(split(v)[3])[1]);

@@ -84,7 +84,10 @@ mod tests {
             if d == 0 {
                 return solid_angle(t[0], t[1], t[2]) * n.dot(centre(t[0], t[1], t[2]));
             }
-            split(t[0], t[1], t[2]).iter().map(|k| rec(*k, n, d - 1)).sum()
+            split(t[0], t[1], t[2])
+                .iter()
+                .map(|k| rec(*k, n, d - 1))
+                .sum()
         }
         let brute = rec([a, b, c], n, 7);
         let exact = projected_solid_angle(a, b, c, n);
@@ -105,7 +108,11 @@ pub fn clip_to_hemisphere(poly: &[DVec3], n: DVec3) -> Vec<DVec3> {
         }
         if (sa > 0.0 && sb < 0.0) || (sa < 0.0 && sb > 0.0) {
             // Positive combination of a and b with n·x = 0: on the minor arc from a to b.
-            let x = if sa > 0.0 { b * sa - a * sb } else { a * sb - b * sa };
+            let x = if sa > 0.0 {
+                b * sa - a * sb
+            } else {
+                a * sb - b * sa
+            };
             out.push(x.normalize());
         }
     }

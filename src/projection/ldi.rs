@@ -201,11 +201,23 @@ mod tests {
         [[a, b, c], [a, c, d]]
     }
 
-    pub(crate) fn scene_of(tris: Vec<([DVec3; 3], u32)>, materials: Vec<Material>) -> ProjectionScene {
+    pub(crate) fn scene_of(
+        tris: Vec<([DVec3; 3], u32)>,
+        materials: Vec<Material>,
+    ) -> ProjectionScene {
         ProjectionScene {
-            normals: tris.iter().map(|(v, _)| (v[1] - v[0]).cross(v[2] - v[0]).normalize()).collect(),
-            areas: tris.iter().map(|(v, _)| 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length()).collect(),
-            glazing_tf: tris.iter().map(|(_, m)| materials[*m as usize].tf).collect(),
+            normals: tris
+                .iter()
+                .map(|(v, _)| (v[1] - v[0]).cross(v[2] - v[0]).normalize())
+                .collect(),
+            areas: tris
+                .iter()
+                .map(|(v, _)| 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length())
+                .collect(),
+            glazing_tf: tris
+                .iter()
+                .map(|(_, m)| materials[*m as usize].tf)
+                .collect(),
             material: tris.iter().map(|(_, m)| *m).collect(),
             vertices: tris.into_iter().map(|(v, _)| v).collect(),
             materials,

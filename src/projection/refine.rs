@@ -9,7 +9,7 @@
 //! depth, or when a patch's projection is smaller than a pixel. A leaf's transfer weight
 //! is (Ap/A)·Σt/n_p = cos θ · (mean transmission over its pixels).
 
-use super::{DirectionRecord, LeafWeight, Ldi, ProjectionParams, ProjectionScene};
+use super::{DirectionRecord, Ldi, LeafWeight, ProjectionParams, ProjectionScene};
 use crate::hierarchy::{split, ElementKey, MAX_DEPTH};
 use crate::math::raster;
 use crate::photometry::Rgb;
@@ -106,7 +106,11 @@ fn refine_triangle(
 }
 
 /// Refines every input triangle against `ldi` and returns the lit leaves in key order.
-pub fn refine_all(scene: &ProjectionScene, ldi: &Ldi, params: &ProjectionParams) -> DirectionRecord {
+pub fn refine_all(
+    scene: &ProjectionScene,
+    ldi: &Ldi,
+    params: &ProjectionParams,
+) -> DirectionRecord {
     let parts: Vec<(Vec<LeafWeight>, u64, u64)> = (0..scene.vertices.len() as u32)
         .into_par_iter()
         .with_min_len(64)

@@ -5,7 +5,7 @@ use super::config::{Quality, SkySpec};
 use super::report::{Counts, Report, StageTimes, SunReport};
 use crate::error::{Error, Result};
 use crate::hierarchy::Hierarchy;
-use crate::photometry::{grey, lux, Rgb};
+use crate::photometry::{grey, lux};
 use crate::projection::{self, DirectionRecord, ProjectionScene};
 use crate::scene::Scene;
 use crate::sensors::{all_sensors_direct, SensorDirect, Visibility};
@@ -49,10 +49,19 @@ pub struct InstantResult {
 ///
 /// # Errors
 /// Bad sky parameters ([`Error::Input`]).
-pub fn build_sky(spec: &SkySpec, sun: &SolarPosition, day_of_year: u32, ground: f64) -> Result<Sky> {
+pub fn build_sky(
+    spec: &SkySpec,
+    sun: &SolarPosition,
+    day_of_year: u32,
+    ground: f64,
+) -> Result<Sky> {
     let d = sun.direction();
     match *spec {
-        SkySpec::Perez { dni, dhi, dew_point_c } => sky::perez::sky(
+        SkySpec::Perez {
+            dni,
+            dhi,
+            dew_point_c,
+        } => sky::perez::sky(
             dni,
             dhi,
             d,
@@ -60,9 +69,13 @@ pub fn build_sky(spec: &SkySpec, sun: &SolarPosition, day_of_year: u32, ground: 
             dew_point_c.unwrap_or(sky::perez::DEFAULT_DEW_POINT_C),
             ground,
         ),
-        SkySpec::CieOvercast { dhi } => {
-            sky::cie::sky(sky::cie::CieSkyType::TraditionalOvercast, dhi, 0.0, d, ground)
-        }
+        SkySpec::CieOvercast { dhi } => sky::cie::sky(
+            sky::cie::CieSkyType::TraditionalOvercast,
+            dhi,
+            0.0,
+            d,
+            ground,
+        ),
         SkySpec::Cie { sky_type, dhi, dni } => {
             sky::cie::sky(sky::cie::CieSkyType::General(sky_type), dhi, dni, d, ground)
         }
@@ -101,13 +114,21 @@ pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report)
         }
     }
     if sources.is_empty() {
-        report.skipped.push("all projections: the sky emits nothing at this instant".into());
+        report
+            .skipped
+            .push("all projections: the sky emits nothing at this instant".into());
     }
     if !scene.has_glazing() {
-        report.skipped.push("glazing transmission: the scene has no glazing".into());
+        report
+            .skipped
+            .push("glazing transmission: the scene has no glazing".into());
     }
     let (lo, hi) = scene.bounds();
-    let diagonal = if scene.triangles.is_empty() { 0.0 } else { (hi - lo).length() };
+    let diagonal = if scene.triangles.is_empty() {
+        0.0
+    } else {
+        (hi - lo).length()
+    };
     if let Some(e) = snap_err {
         report.sun.used = true;
         report.sun.snapping_error_deg = e;
@@ -116,7 +137,10 @@ pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report)
 
     // Projections: one LDI per source, in parallel; records kept in source order.
     let pscene = ProjectionScene::new(scene);
-    let e_max = sources.iter().map(|s| grey(s.normal_irradiance)).fold(0.0, f64::max);
+    let e_max = sources
+        .iter()
+        .map(|s| grey(s.normal_irradiance))
+        .fold(0.0, f64::max);
     let records: Vec<DirectionRecord> = times.time("projection", || {
         if scene.triangles.is_empty() {
             return vec![DirectionRecord::default(); sources.len()];
@@ -124,13 +148,17 @@ pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report)
         sources
             .par_iter()
             .map(|s| {
-                let res = quality.projection.resolution_for(grey(s.normal_irradiance), e_max);
+                let res = quality
+                    .projection
+                    .resolution_for(grey(s.normal_irradiance), e_max);
                 projection::project(&pscene, s.direction, res, &quality.projection)
             })
             .collect()
     });
     if scene.triangles.is_empty() {
-        report.skipped.push("projections: the scene has no geometry".into());
+        report
+            .skipped
+            .push("projections: the scene has no geometry".into());
     }
     for (s, r) in sources.iter().zip(&records) {
         counts.ldis_built += usize::from(!scene.triangles.is_empty());
@@ -160,7 +188,9 @@ pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report)
     // Sensors, and the same gather one level coarser for the error estimate.
     let mut values = vec![SensorValue::default(); scene.sensors.len()];
     if scene.sensors.is_empty() {
-        report.skipped.push("sensor gather: the scene has no sensors".into());
+        report
+            .skipped
+            .push("sensor gather: the scene has no sensors".into());
     } else {
         let vis = times.time("bvh", || Visibility::new(scene));
         let fine: Vec<SensorDirect> = times.time("sensors", || {
@@ -230,7 +260,9 @@ pub fn run_instant(
         ..Report::default()
     };
     let mut times = StageTimes::default();
-    let sun = times.time("solar_position", || solar_position(instant_utc, &scene.site));
+    let sun = times.time("solar_position", || {
+        solar_position(instant_utc, &scene.site)
+    });
     report.sun = SunReport {
         altitude_deg: sun.altitude_deg(),
         azimuth_deg: sun.azimuth_deg,
@@ -240,9 +272,10 @@ pub fn run_instant(
         build_sky(spec, &sun, local.ordinal(), scene.ground_reflectance)
     })?;
     if sky.sun.is_none() && !matches!(spec, SkySpec::CieOvercast { .. } | SkySpec::None) {
-        report
-            .skipped
-            .push(format!("sun: not a source (altitude {:.2}°, or zero direct irradiance)", sun.altitude_deg()));
+        report.skipped.push(format!(
+            "sun: not a source (altitude {:.2}°, or zero direct irradiance)",
+            sun.altitude_deg()
+        ));
     }
     report.sky = sky.description.clone();
     report.stage_seconds = times;
@@ -270,4 +303,3 @@ pub fn write_instant(scene: &Scene, result: &InstantResult, out: &Path) -> Resul
     crate::files::write_atomic(&out.join("report.json"), json.as_bytes())?;
     Ok(())
 }
-

@@ -54,7 +54,12 @@ pub fn parse_time(
         let utc = t.with_timezone(&chrono::Utc);
         return Ok((utc, utc.naive_utc() + offset));
     }
-    for fmt in ["%Y-%m-%dT%H:%M:%S", "%Y-%m-%dT%H:%M", "%Y-%m-%d %H:%M:%S", "%Y-%m-%d %H:%M"] {
+    for fmt in [
+        "%Y-%m-%dT%H:%M:%S",
+        "%Y-%m-%dT%H:%M",
+        "%Y-%m-%d %H:%M:%S",
+        "%Y-%m-%d %H:%M",
+    ] {
         if let Ok(local) = NaiveDateTime::parse_from_str(text, fmt) {
             return Ok(((local - offset).and_utc(), local));
         }

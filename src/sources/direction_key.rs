@@ -144,9 +144,15 @@ mod tests {
     fn path_round_trips() {
         let k = SkyNodeKey::root(2).child(3).child(0).child(2);
         assert_eq!(k.depth(), 3);
-        assert_eq!(k.parent().unwrap().parent().unwrap().parent().unwrap(), SkyNodeKey::root(2));
+        assert_eq!(
+            k.parent().unwrap().parent().unwrap().parent().unwrap(),
+            SkyNodeKey::root(2)
+        );
         let [a, b, c] = SkyNodeKey::root(2).child(3).vertices();
-        assert_eq!(spherical_triangle::split(a, b, c)[0], k.parent().unwrap().vertices());
+        assert_eq!(
+            spherical_triangle::split(a, b, c)[0],
+            k.parent().unwrap().vertices()
+        );
     }
 
     #[test]

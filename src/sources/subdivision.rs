@@ -78,7 +78,10 @@ fn node_radiance(sky: &Sky, key: SkyNodeKey, v: &[DVec3; 3]) -> Rgb {
         }
     };
     let c = spherical_triangle::centre(v[0], v[1], v[2]);
-    (sky.radiance(lift(v[0])) + sky.radiance(lift(v[1])) + sky.radiance(lift(v[2])) + sky.radiance(lift(c)))
+    (sky.radiance(lift(v[0]))
+        + sky.radiance(lift(v[1]))
+        + sky.radiance(lift(v[2]))
+        + sky.radiance(lift(c)))
         * 0.25
 }
 
@@ -220,7 +223,10 @@ mod tests {
             .sum();
         assert!((e - 2.0 * PI).abs() < 1e-9, "{e}");
         // Uniform: no adaptive splitting beyond min_depth (or the irradiance cap).
-        assert!(src.sources.iter().all(|s| s.key != SourceKey::Ground(SkyNodeKey::root(4))));
+        assert!(src
+            .sources
+            .iter()
+            .all(|s| s.key != SourceKey::Ground(SkyNodeKey::root(4))));
         // A black ground is left out whole: its four faces are counted, not split.
         assert_eq!(src.negligible, 4);
     }
@@ -230,11 +236,27 @@ mod tests {
         let s = sky(Box::new(Spot), 0.1);
         let src = sky_sources(&s, &SkyParams::default());
         let spot = DVec3::new(0.5, 0.0, 0.866).normalize();
-        let near: Vec<_> = src.sources.iter().filter(|s| s.direction.dot(spot) > 0.99).collect();
-        let far: Vec<_> = src.sources.iter().filter(|s| s.direction.dot(spot) < 0.5).collect();
+        let near: Vec<_> = src
+            .sources
+            .iter()
+            .filter(|s| s.direction.dot(spot) > 0.99)
+            .collect();
+        let far: Vec<_> = src
+            .sources
+            .iter()
+            .filter(|s| s.direction.dot(spot) < 0.5)
+            .collect();
         let mean = |v: &[&Source]| v.iter().map(|s| s.solid_angle).sum::<f64>() / v.len() as f64;
-        assert!(mean(&near) * 4.0 < mean(&far), "{} vs {}", mean(&near), mean(&far));
-        assert!(src.sources.iter().any(|s| matches!(s.key, SourceKey::Ground(_))));
+        assert!(
+            mean(&near) * 4.0 < mean(&far),
+            "{} vs {}",
+            mean(&near),
+            mean(&far)
+        );
+        assert!(src
+            .sources
+            .iter()
+            .any(|s| matches!(s.key, SourceKey::Ground(_))));
     }
 
     #[test]

@@ -34,8 +34,16 @@ fn once(scene: &Scene, spec: &SkySpec, q: &Quality) -> (InstantResult, f64) {
 }
 
 fn bench_scene(name: &str, scene: &Scene, runs: usize) {
-    let spec = SkySpec::Perez { dni: 750.0, dhi: 110.0, dew_point_c: None };
-    println!("\n## {name}: {} triangles, {} sensors", scene.triangles.len(), scene.sensors.len());
+    let spec = SkySpec::Perez {
+        dni: 750.0,
+        dhi: 110.0,
+        dew_point_c: None,
+    };
+    println!(
+        "\n## {name}: {} triangles, {} sensors",
+        scene.triangles.len(),
+        scene.sensors.len()
+    );
     let q = Quality::default();
     let mut stages: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let mut totals = Vec::new();
@@ -61,7 +69,14 @@ fn bench_scene(name: &str, scene: &Scene, runs: usize) {
     }
     let shoot: f64 = ["sources", "projection", "transfer"]
         .iter()
-        .filter_map(|s| r.report.stage_seconds.0.iter().find(|(k, _)| k == s).map(|(_, t)| *t))
+        .filter_map(|s| {
+            r.report
+                .stage_seconds
+                .0
+                .iter()
+                .find(|(k, _)| k == s)
+                .map(|(_, t)| *t)
+        })
         .sum();
     println!("sun + sky shoot (sources + projection + transfer), last run: {shoot:.3} s; peak RSS so far {:.0} MB", peak_rss_mb());
 
@@ -95,14 +110,20 @@ fn bench_scene(name: &str, scene: &Scene, runs: usize) {
             100.0 * covered as f64 / n
         );
     }
-    println!("| reference | {t_ref:.3} | 0 | 0 | 0 | {:.1} | - |", reference.sensors.iter().map(|s| s.lux_err).sum::<f64>() / reference.sensors.len().max(1) as f64);
+    println!(
+        "| reference | {t_ref:.3} | 0 | 0 | 0 | {:.1} | - |",
+        reference.sensors.iter().map(|s| s.lux_err).sum::<f64>()
+            / reference.sensors.len().max(1) as f64
+    );
     println!("peak RSS after {name}: {:.0} MB", peak_rss_mb());
 }
 
 fn main() {
     let threads = rayon::current_num_threads();
     println!("# daystep instant benchmark ({threads} threads)");
-    let office = Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office/scene.toml")).unwrap();
+    let office =
+        Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office/scene.toml"))
+            .unwrap();
     bench_scene("sample office", &office, 7);
     let building = synthetic::multi_storey_building(10_000);
     bench_scene("generated building", &building, 3);

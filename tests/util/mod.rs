@@ -76,10 +76,22 @@ impl Builder {
     /// Four vertical walls of the box [x0,x1]×[y0,y1]×[z0,z1], facing inwards.
     pub fn walls_inward(&mut self, x0: f64, x1: f64, y0: f64, y1: f64, z0: f64, z1: f64, m: u32) {
         let p = |x, y, z| DVec3::new(x, y, z);
-        self.quad([p(x0, y0, z0), p(x0, y0, z1), p(x1, y0, z1), p(x1, y0, z0)], m); // south, +y
-        self.quad([p(x1, y1, z0), p(x1, y1, z1), p(x0, y1, z1), p(x0, y1, z0)], m); // north, -y
-        self.quad([p(x0, y1, z0), p(x0, y1, z1), p(x0, y0, z1), p(x0, y0, z0)], m); // west, +x
-        self.quad([p(x1, y0, z0), p(x1, y0, z1), p(x1, y1, z1), p(x1, y1, z0)], m); // east, -x
+        self.quad(
+            [p(x0, y0, z0), p(x0, y0, z1), p(x1, y0, z1), p(x1, y0, z0)],
+            m,
+        ); // south, +y
+        self.quad(
+            [p(x1, y1, z0), p(x1, y1, z1), p(x0, y1, z1), p(x0, y1, z0)],
+            m,
+        ); // north, -y
+        self.quad(
+            [p(x0, y1, z0), p(x0, y1, z1), p(x0, y0, z1), p(x0, y0, z0)],
+            m,
+        ); // west, +x
+        self.quad(
+            [p(x1, y0, z0), p(x1, y0, z1), p(x1, y1, z1), p(x1, y1, z0)],
+            m,
+        ); // east, -x
     }
     pub fn sensor(&mut self, p: DVec3, n: DVec3) {
         self.input.sensors.push((p, n));
