@@ -95,6 +95,15 @@ impl Scene {
         self.materials.iter().any(Material::is_glazing)
     }
 
+    /// False when the scene file had no `[site]` table and [`Site::default`] stands in, so a
+    /// weather file's site should be used instead (without a disagreement warning).
+    pub fn site_given(&self) -> bool {
+        !self
+            .warnings
+            .iter()
+            .any(|w| w.contains(scene_file::NO_SITE_WARNING))
+    }
+
     /// Axis-aligned bounds of all triangles (scene frame): (min, max).
     pub fn bounds(&self) -> (DVec3, DVec3) {
         let mut lo = DVec3::splat(f64::INFINITY);

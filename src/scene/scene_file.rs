@@ -1,15 +1,510 @@
 //! `scene.toml` (serde): geometry and sensor paths, up axis, north rotation, ground
-//! reflectance and site. PLACEHOLDER.
+//! reflectance and site (see INTERFACE.md, "Scene file").
+//!
+//! Unknown keys are not errors but warnings, so files written for a newer daystep still load.
+//! Values are read as [`toml::Spanned`] so that range errors name their line.
 
-use super::Scene;
-use crate::error::Result;
-use std::path::Path;
+use super::{obj, sensors, ModelInput, Scene};
+use crate::error::{Error, Result};
+use crate::files;
+use crate::site::Site;
+use serde::Deserialize;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use toml::Spanned;
+
+/// Text of the warning given when the scene file has no `[site]` table and
+/// [`Site::default`] stands in (a weather file may give the site later).
+pub const NO_SITE_WARNING: &str =
+    "no [site] table: using the default site (Greenwich, UTC) unless a weather file gives one";
+
+/// Top-level keys of a scene file.
+const KNOWN_KEYS: [&str; 6] = [
+    "geometry",
+    "sensors",
+    "up",
+    "north_deg",
+    "ground_reflectance",
+    "site",
+];
+/// Keys of the `[site]` table.
+const KNOWN_SITE_KEYS: [&str; 4] = ["latitude", "longitude", "utc_offset_h", "elevation_m"];
+
+/// The scene file as written; unknown keys are ignored by serde (and reported separately).
+#[derive(Deserialize)]
+struct SceneToml {
+    geometry: Option<Spanned<String>>,
+    sensors: Option<Spanned<String>>,
+    up: Option<Spanned<String>>,
+    north_deg: Option<Spanned<f64>>,
+    ground_reflectance: Option<Spanned<f64>>,
+    site: Option<SiteToml>,
+}
+
+/// The `[site]` table as written.
+#[derive(Deserialize)]
+struct SiteToml {
+    latitude: Spanned<f64>,
+    longitude: Spanned<f64>,
+    utc_offset_h: Spanned<f64>,
+    elevation_m: Option<Spanned<f64>>,
+}
 
 /// Loads a scene file and everything it references (see INTERFACE.md).
 ///
+/// Paths in the file are relative to the scene file's folder. Warnings (unknown keys, a
+/// missing `[site]`, unknown MTL keys, …) end up in [`Scene::warnings`], each once.
+///
 /// # Errors
-/// [`crate::Error::Input`] naming file, line and value.
+/// [`Error::Input`] naming file, line and value: TOML syntax, a missing `geometry`, a
+/// referenced file that does not exist, a value out of range (latitude outside [−90, 90],
+/// longitude outside [−180, 180], `utc_offset_h` outside [−14, 14], `ground_reflectance`
+/// outside [0, 1), anything non-finite, `up` not "z" or "y"), and every error of
+/// [`obj::load`] and [`sensors::load`]. [`Error::Io`] when a file cannot be read.
 pub fn load(path: &Path) -> Result<Scene> {
-    let _ = path;
-    todo!()
+    let text = files::read_text(path)?;
+    let parsed = parse(path, &text)?;
+    let (triangles, materials, groups, obj_warnings) = obj::load(&parsed.geometry, parsed.y_up)?;
+    let sensors = match &parsed.sensors {
+        Some(p) => sensors::load(p, parsed.y_up)?,
+        None => Vec::new(),
+    };
+    let input = ModelInput {
+        triangles,
+        materials,
+        groups,
+        sensors,
+        north_deg: parsed.north_deg,
+        site: parsed.site,
+        ground_reflectance: parsed.ground_reflectance,
+    };
+    let mut scene = Scene::from_model(path, input)?;
+    let mut warnings = parsed.warnings;
+    warnings.extend(obj_warnings);
+    // Each remark once, in order of appearance.
+    let mut seen = std::collections::HashSet::new();
+    warnings.retain(|w| seen.insert(w.clone()));
+    scene.warnings.extend(warnings);
+    Ok(scene)
+}
+
+/// A validated scene file, paths resolved.
+#[derive(Debug)]
+struct Parsed {
+    geometry: PathBuf,
+    sensors: Option<PathBuf>,
+    y_up: bool,
+    north_deg: f64,
+    ground_reflectance: f64,
+    site: Site,
+    warnings: Vec<String>,
+}
+
+/// 1-based line of a byte offset.
+fn line_of(text: &str, offset: usize) -> usize {
+    let end = offset.min(text.len());
+    text.as_bytes()[..end]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+        + 1
+}
+
+/// Parses and validates scene-file text; `path` names it in errors and anchors relative
+/// paths. Referenced files must exist but are not read.
+fn parse(path: &Path, text: &str) -> Result<Parsed> {
+    let raw: SceneToml = toml::from_str(text).map_err(|e| {
+        let span = e.span();
+        let line = span.clone().map(|s| line_of(text, s.start));
+        // Quote the offending text when it is short and on one line, else the whole line.
+        let value = span.and_then(|s| {
+            let short = text
+                .get(s.clone())
+                .map(str::trim)
+                .filter(|v| !v.is_empty() && v.len() <= 80 && !v.contains('\n'));
+            short.or_else(|| {
+                text.lines()
+                    .nth(line_of(text, s.start) - 1)
+                    .map(str::trim)
+                    .filter(|v| !v.is_empty())
+            })
+        });
+        Error::input(
+            path,
+            line,
+            value,
+            format!("invalid scene file: {}", e.message().trim()),
+        )
+    })?;
+    let at = |span: Range<usize>| Some(line_of(text, span.start));
+    let mut warnings = unknown_keys(path, text);
+
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let file = |key: &str, value: &Spanned<String>| -> Result<PathBuf> {
+        let resolved = dir.join(value.get_ref());
+        if resolved.is_file() {
+            Ok(resolved)
+        } else {
+            Err(Error::input(
+                path,
+                at(value.span()),
+                Some(value.get_ref()),
+                format!("{key} file not found: {}", resolved.display()),
+            ))
+        }
+    };
+    let geometry = match &raw.geometry {
+        Some(g) => file("geometry", g)?,
+        None => {
+            return Err(Error::input(
+                path,
+                None,
+                None,
+                "missing required key `geometry` (the OBJ file, relative to the scene file)",
+            ))
+        }
+    };
+    let sensors = raw
+        .sensors
+        .as_ref()
+        .map(|s| file("sensors", s))
+        .transpose()?;
+
+    let y_up = match &raw.up {
+        None => false,
+        Some(u) => match u.get_ref().to_ascii_lowercase().as_str() {
+            "z" => false,
+            "y" => true,
+            _ => {
+                return Err(Error::input(
+                    path,
+                    at(u.span()),
+                    Some(u.get_ref()),
+                    "`up` must be \"z\" or \"y\"",
+                ))
+            }
+        },
+    };
+
+    // A number with its allowed range; `None` range = any finite value.
+    let check = |key: &str, v: &Spanned<f64>, range: Option<(f64, f64, bool)>| -> Result<f64> {
+        let x = *v.get_ref();
+        let ok = x.is_finite()
+            && range.is_none_or(|(lo, hi, closed)| x >= lo && (x < hi || (closed && x <= hi)));
+        if ok {
+            return Ok(x);
+        }
+        let message = match range {
+            Some((lo, hi, true)) => format!("`{key}` must be in [{lo}, {hi}]"),
+            Some((lo, hi, false)) => format!("`{key}` must be in [{lo}, {hi})"),
+            None => format!("`{key}` must be finite"),
+        };
+        Err(Error::input(
+            path,
+            at(v.span()),
+            Some(&x.to_string()),
+            message,
+        ))
+    };
+    let north_deg = raw
+        .north_deg
+        .as_ref()
+        .map(|v| check("north_deg", v, None))
+        .transpose()?
+        .unwrap_or(0.0);
+    let ground_reflectance = raw
+        .ground_reflectance
+        .as_ref()
+        .map(|v| check("ground_reflectance", v, Some((0.0, 1.0, false))))
+        .transpose()?
+        .unwrap_or(0.2);
+    let site = match &raw.site {
+        Some(s) => Site {
+            latitude: check("site.latitude", &s.latitude, Some((-90.0, 90.0, true)))?,
+            longitude: check("site.longitude", &s.longitude, Some((-180.0, 180.0, true)))?,
+            utc_offset_h: check(
+                "site.utc_offset_h",
+                &s.utc_offset_h,
+                Some((-14.0, 14.0, true)),
+            )?,
+            elevation_m: s
+                .elevation_m
+                .as_ref()
+                .map(|v| check("site.elevation_m", v, None))
+                .transpose()?
+                .unwrap_or(0.0),
+        },
+        None => {
+            warnings.push(format!("{}: {NO_SITE_WARNING}", path.display()));
+            Site::default()
+        }
+    };
+    Ok(Parsed {
+        geometry,
+        sensors,
+        y_up,
+        north_deg,
+        ground_reflectance,
+        site,
+        warnings,
+    })
+}
+
+/// Warnings for keys this version does not know (top level and in `[site]`), with the line
+/// where the key is first written when it can be found.
+fn unknown_keys(path: &Path, text: &str) -> Vec<String> {
+    // The text already parsed as the struct, so it parses as a table too.
+    let Ok(table) = text.parse::<toml::Table>() else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    let mut report = |key: String, last: &str| {
+        let line = text
+            .lines()
+            .position(|l| {
+                l.trim_start()
+                    .strip_prefix(last)
+                    .is_some_and(|r| r.trim_start().starts_with('=') || r.starts_with(['.', ']']))
+            })
+            .map(|i| format!(":{}", i + 1))
+            .unwrap_or_default();
+        out.push(format!(
+            "{}{line}: unknown key `{key}` ignored",
+            path.display()
+        ));
+    };
+    for (k, v) in &table {
+        if !KNOWN_KEYS.contains(&k.as_str()) {
+            report(k.clone(), k);
+        } else if k == "site" {
+            if let Some(site) = v.as_table() {
+                for sk in site.keys() {
+                    if !KNOWN_SITE_KEYS.contains(&sk.as_str()) {
+                        report(format!("site.{sk}"), sk);
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec3;
+
+    const MTL: &str = "newmtl wall\nKd 0.5 0.5 0.5\nnewmtl glass\nTf 0.88 0.88 0.88\n";
+    const OBJ: &str = "\
+mtllib m.mtl
+v 0 0 0
+v 10 0 0
+v 10 1 0
+v 0 1 0
+g floor
+usemtl wall
+f 1 2 3 4
+g window
+usemtl glass
+f 1 2 4
+";
+    const SITE: &str =
+        "[site]\nlatitude = 37.42\nlongitude = -5.90\nutc_offset_h = 1\nelevation_m = 31.0\n";
+
+    /// Writes the model, sensors and `scene` text into a temporary folder and loads it.
+    fn load_scene(scene: &str) -> (tempfile::TempDir, Result<Scene>) {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("m.mtl"), MTL).unwrap();
+        std::fs::create_dir(dir.path().join("geo")).unwrap();
+        std::fs::write(dir.path().join("geo/m.mtl"), MTL).unwrap();
+        std::fs::write(dir.path().join("geo/a.obj"), OBJ).unwrap();
+        std::fs::write(
+            dir.path().join("s.pts"),
+            "1 0 0.8 1 0 0\n# c\n2 0 0.8 0 0 1\n",
+        )
+        .unwrap();
+        let p = dir.path().join("scene.toml");
+        std::fs::write(&p, scene).unwrap();
+        let r = load(&p);
+        (dir, r)
+    }
+
+    fn input_error(e: Error) -> (String, Option<usize>, Option<String>) {
+        let shown = e.to_string();
+        match e {
+            Error::Input { line, value, .. } => (shown, line, value),
+            other => panic!("expected an input error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn valid_scene_loads_everything() {
+        let (_d, r) = load_scene(&format!(
+            "geometry = \"geo/a.obj\"\nsensors = \"s.pts\"\nground_reflectance = 0.3\n{SITE}"
+        ));
+        let s = r.unwrap();
+        assert_eq!(s.triangles.len(), 3);
+        assert_eq!(s.materials.len(), 2);
+        assert!(s.has_glazing());
+        assert_eq!(s.groups, ["floor", "window"]);
+        assert_eq!(s.sensors.len(), 2);
+        assert_eq!(
+            s.site,
+            Site {
+                latitude: 37.42,
+                longitude: -5.90,
+                utc_offset_h: 1.0,
+                elevation_m: 31.0
+            }
+        );
+        assert_eq!(s.ground_reflectance, 0.3);
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        // Model coordinates are recovered with the origin (north_deg 0: no rotation).
+        assert_eq!(s.triangles[0].v[1] + s.origin, DVec3::new(10.0, 0.0, 0.0));
+        assert_eq!(s.sensors[0].input_position, DVec3::new(1.0, 0.0, 0.8));
+        assert_eq!(s.sensors[0].normal, DVec3::X);
+    }
+
+    #[test]
+    fn defaults_and_missing_site_warn() {
+        let (_d, r) = load_scene("geometry = \"geo/a.obj\"\n");
+        let s = r.unwrap();
+        assert_eq!(s.site, Site::default());
+        assert_eq!(s.ground_reflectance, 0.2);
+        assert!(s.sensors.is_empty());
+        assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+        assert!(s.warnings[0].contains(NO_SITE_WARNING));
+        assert!(!s.site_given());
+        let (_d, r) = load_scene(&format!("geometry = \"geo/a.obj\"\n{SITE}"));
+        assert!(r.unwrap().site_given());
+    }
+
+    #[test]
+    fn unknown_keys_warn_but_load() {
+        let (_d, r) = load_scene(&format!(
+            "geometry = \"geo/a.obj\"\nfuture_option = 3\n{SITE}timezone_name = \"x\"\n"
+        ));
+        let s = r.unwrap();
+        assert_eq!(s.warnings.len(), 2, "{:?}", s.warnings);
+        assert!(
+            s.warnings[0].contains(":2: unknown key `future_option`"),
+            "{:?}",
+            s.warnings
+        );
+        assert!(
+            s.warnings[1].contains("`site.timezone_name`"),
+            "{:?}",
+            s.warnings
+        );
+    }
+
+    #[test]
+    fn north_deg_90_turns_model_x_to_true_north() {
+        let (_d, r) = load_scene(&format!(
+            "geometry = \"geo/a.obj\"\nsensors = \"s.pts\"\nnorth_deg = 90\n{SITE}"
+        ));
+        let s = r.unwrap();
+        // Sensor 0 looks along model +X: in the scene frame it looks north (+Y).
+        assert!(
+            (s.sensors[0].normal - DVec3::Y).length() < 1e-12,
+            "{}",
+            s.sensors[0].normal
+        );
+        // The model point (10, 0, 0) lies 10 m north of the model point (0, 0, 0).
+        let t = &s.triangles[0];
+        let d = t.v[1] - t.v[0];
+        assert!((d - DVec3::new(0.0, 10.0, 0.0)).length() < 1e-12, "{d}");
+        // Model +Y points west.
+        let d = t.v[2] - t.v[1];
+        assert!((d - DVec3::new(-1.0, 0.0, 0.0)).length() < 1e-12, "{d}");
+    }
+
+    #[test]
+    fn y_up_applies_to_geometry_and_sensors() {
+        let (_d, r) = load_scene(&format!(
+            "geometry = \"geo/a.obj\"\nsensors = \"s.pts\"\nup = \"y\"\n{SITE}"
+        ));
+        let s = r.unwrap();
+        // File sensor (1, 0, 0.8) looking +X → model (1, −0.8, 0); direction (0,0,1) → (0,−1,0).
+        assert_eq!(s.sensors[0].input_position, DVec3::new(1.0, -0.8, 0.0));
+        assert_eq!(s.sensors[1].normal, DVec3::new(0.0, -1.0, 0.0));
+        // The floor quad (in the file's XY plane) now stands in the XZ plane, facing −Y.
+        assert!((s.triangles[0].normal() - DVec3::new(0.0, -1.0, 0.0)).length() < 1e-12);
+    }
+
+    #[test]
+    fn errors_name_scene_file_line_and_value() {
+        let g = "geometry = \"geo/a.obj\"\n";
+        let cases: Vec<(String, Option<usize>, Option<&str>)> = vec![
+            (
+                format!("{g}[site]\nlatitude = 91\nlongitude = 0\nutc_offset_h = 0\n"),
+                Some(3),
+                Some("91"),
+            ),
+            (
+                format!("{g}[site]\nlatitude = 0\nlongitude = 200\nutc_offset_h = 0\n"),
+                Some(4),
+                Some("200"),
+            ),
+            (
+                format!("{g}[site]\nlatitude = 0\nlongitude = 0\nutc_offset_h = -15\n"),
+                Some(5),
+                Some("-15"),
+            ),
+            (
+                format!("{g}[site]\nlatitude = nan\nlongitude = 0\nutc_offset_h = 0\n"),
+                Some(3),
+                Some("NaN"),
+            ),
+            (format!("{g}north_deg = inf\n"), Some(2), Some("inf")),
+            (format!("{g}ground_reflectance = 1.0\n"), Some(2), Some("1")),
+            (format!("{g}up = \"x\"\n"), Some(2), Some("x")),
+            (
+                format!("{g}sensors = \"none.pts\"\n"),
+                Some(2),
+                Some("none.pts"),
+            ),
+            (
+                "\n\ngeometry = \"nothere.obj\"\n".into(),
+                Some(3),
+                Some("nothere.obj"),
+            ),
+            ("sensors = \"s.pts\"\n".into(), None, None),
+        ];
+        for (text, line, value) in cases {
+            let (_d, r) = load_scene(&text);
+            let (shown, l, v) = input_error(r.unwrap_err());
+            assert!(shown.contains("scene.toml"), "{shown}");
+            assert_eq!(l, line, "{shown}");
+            assert_eq!(v.as_deref(), value, "{shown}");
+        }
+    }
+
+    #[test]
+    fn toml_syntax_error_reports_line() {
+        let (_d, r) = load_scene("geometry = \"geo/a.obj\"\n\nnorth_deg = = 3\n");
+        let (shown, line, value) = input_error(r.unwrap_err());
+        assert_eq!(line, Some(3), "{shown}");
+        assert!(value.is_some_and(|v| v.contains('=')), "{shown}");
+        assert!(shown.contains("scene.toml:3:"), "{shown}");
+        // A wrong type is reported at its line too.
+        let (_d, r) = load_scene("geometry = \"geo/a.obj\"\nnorth_deg = \"east\"\n");
+        let (shown, line, _) = input_error(r.unwrap_err());
+        assert_eq!(line, Some(2), "{shown}");
+        // And a missing site field at the [site] table.
+        let (_d, r) = load_scene("geometry = \"geo/a.obj\"\n[site]\nlatitude = 1\n");
+        let (shown, line, _) = input_error(r.unwrap_err());
+        assert!(line.is_some() && shown.contains("longitude"), "{shown}");
+    }
+
+    #[test]
+    fn errors_from_referenced_files_propagate() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("a.obj"), "v 0 0 NaN\n").unwrap();
+        let p = dir.path().join("scene.toml");
+        std::fs::write(&p, "geometry = \"a.obj\"\n").unwrap();
+        let (shown, line, value) = input_error(load(&p).unwrap_err());
+        assert!(shown.contains("a.obj:1:"), "{shown}");
+        assert_eq!((line, value.as_deref()), (Some(1), Some("NaN")));
+    }
 }
