@@ -73,10 +73,14 @@ impl Error {
         }
     }
 
-    /// Process exit code for this error: 1 for bad input, 2 otherwise.
+    /// Process exit code for this error: 1 for bad input (including a missing or unreadable
+    /// file), 2 otherwise.
     pub fn exit_code(&self) -> i32 {
+        use std::io::ErrorKind::{NotFound, PermissionDenied};
         match self {
             Error::Input { .. } => 1,
+            // A file the user named that is missing or unreadable is bad input too.
+            Error::Io { source, .. } if matches!(source.kind(), NotFound | PermissionDenied) => 1,
             _ => 2,
         }
     }

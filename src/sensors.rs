@@ -5,12 +5,14 @@
 //! node's exact projected solid angle (Lambert's contour formula, clipped at the sensor's
 //! horizon); where it differs the node is split (same quadtree as the sky) down to a
 //! maximum depth — the paper's visibility-driven refinement, in direction space. The sun
-//! contributes E_n · cos θ · τ along its snapped direction. Visibility is an exact ray cast
+//! contributes E_n · cos θ · τ along its snapped direction. Radiance is applied per child of
+//! each node (the sources carry their four children's radiance), one level finer than the
+//! sources' L̂, and the difference to L̂ is reported as an error estimate. Visibility is an exact ray cast
 //! (two-sided opaque occluders, glazing multiplies by τ(θ)).
 
 use crate::math::bvh::Bvh;
 use crate::math::spherical_triangle::{clip_to_hemisphere, projected_solid_angle_polygon, split};
-use crate::photometry::Rgb;
+use crate::photometry::{grey, lux, Rgb};
 use crate::scene::{Scene, Sensor};
 use crate::sources::Source;
 use glam::DVec3;
@@ -88,9 +90,71 @@ pub struct SensorDirect {
     pub sky: Rgb,
     /// Rays cast for this sensor.
     pub rays: u64,
+    /// Variance-like visibility uncertainty, lux²: Σ over partly visible nodes at the
+    /// deepest split of (half the range of their visibility samples × projected solid
+    /// angle × L̂)².
+    pub visibility_var_lux2: f64,
+    /// Signed difference (RGB, W/m²) between weighting each node's children by their own
+    /// radiance and weighting the whole node by L̂: the error of the coarser sky
+    /// representation, an upper estimate of the finer one's.
+    pub radiance_error: Rgb,
 }
 
-/// ∫_tri V τ max(0, n·ω) dω for one node, adaptively (see the module doc).
+/// Visibility samples of a node (corners and centre of its part above the sensor's
+/// horizon) and that part's projected solid angle; `None` when nothing is above.
+fn sample_node(
+    vis: &Visibility,
+    p: DVec3,
+    n: DVec3,
+    tri: &[DVec3; 3],
+    rays: &mut u64,
+) -> Option<(Vec<Rgb>, f64)> {
+    let poly = clip_to_hemisphere(tri, n);
+    if poly.len() < 3 {
+        return None;
+    }
+    let psa = projected_solid_angle_polygon(&poly, n);
+    if psa <= 0.0 {
+        return None;
+    }
+    let centre = poly.iter().fold(DVec3::ZERO, |a, &b| a + b).normalize();
+    let samples: Vec<Rgb> = poly
+        .iter()
+        .chain(std::iter::once(&centre))
+        .map(|d| vis.transmission(p, *d))
+        .collect();
+    *rays += samples.len() as u64;
+    Some((samples, psa))
+}
+
+/// (uniform value, or the mean and the half range in grey) of a node's samples.
+fn summarise(samples: &[Rgb]) -> (bool, Rgb, f64) {
+    let first = samples[0];
+    let uniform = samples
+        .iter()
+        .all(|s| (*s - first).abs().max_element() < 1e-9);
+    let mean = samples.iter().fold(Rgb::ZERO, |a, &b| a + b) / samples.len() as f64;
+    let (lo, hi) = samples
+        .iter()
+        .map(|s| grey(*s))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        });
+    (uniform, mean, 0.5 * (hi - lo))
+}
+
+fn clipped_psa(tri: &[DVec3; 3], n: DVec3) -> f64 {
+    let poly = clip_to_hemisphere(tri, n);
+    if poly.len() < 3 {
+        0.0
+    } else {
+        projected_solid_angle_polygon(&poly, n)
+    }
+}
+
+/// ∫_tri V τ max(0, n·ω) dω for one node, adaptively (see the module doc). `var`
+/// accumulates (half range × projected solid angle)² of partly visible nodes at the
+/// deepest split.
 fn node_integral(
     vis: &Visibility,
     p: DVec3,
@@ -98,36 +162,49 @@ fn node_integral(
     tri: [DVec3; 3],
     depth_left: u32,
     rays: &mut u64,
+    var: &mut f64,
 ) -> Rgb {
-    let poly = clip_to_hemisphere(&tri, n);
-    if poly.len() < 3 {
+    let Some((samples, psa)) = sample_node(vis, p, n, &tri, rays) else {
         return Rgb::ZERO;
-    }
-    let psa = projected_solid_angle_polygon(&poly, n);
-    if psa <= 0.0 {
-        return Rgb::ZERO;
-    }
-    let centre = poly.iter().fold(DVec3::ZERO, |a, &b| a + b).normalize();
-    let mut samples = Vec::with_capacity(poly.len() + 1);
-    for d in poly.iter().chain(std::iter::once(&centre)) {
-        samples.push(vis.transmission(p, *d));
-        *rays += 1;
-    }
-    let first = samples[0];
-    let uniform = samples
-        .iter()
-        .all(|s| (*s - first).abs().max_element() < 1e-9);
+    };
+    let (uniform, mean, half_range) = summarise(&samples);
     if uniform {
-        return first * psa;
+        return samples[0] * psa;
     }
     if depth_left == 0 {
-        let mean = samples.iter().fold(Rgb::ZERO, |a, &b| a + b) / samples.len() as f64;
+        *var += (half_range * psa).powi(2);
         return mean * psa;
     }
     split(tri[0], tri[1], tri[2])
         .iter()
-        .map(|k| node_integral(vis, p, n, *k, depth_left - 1, rays))
+        .map(|k| node_integral(vis, p, n, *k, depth_left - 1, rays, var))
         .fold(Rgb::ZERO, |a, b| a + b)
+}
+
+/// The same integral split over the node's four children (split order), so each child's
+/// radiance can weight its own part.
+fn node_children(
+    vis: &Visibility,
+    p: DVec3,
+    n: DVec3,
+    tri: [DVec3; 3],
+    depth_left: u32,
+    rays: &mut u64,
+    var: &mut f64,
+) -> [Rgb; 4] {
+    let Some((samples, psa)) = sample_node(vis, p, n, &tri, rays) else {
+        return [Rgb::ZERO; 4];
+    };
+    let kids = split(tri[0], tri[1], tri[2]);
+    let (uniform, mean, half_range) = summarise(&samples);
+    if uniform {
+        return kids.map(|k| samples[0] * clipped_psa(&k, n));
+    }
+    if depth_left == 0 {
+        *var += (half_range * psa).powi(2);
+        return kids.map(|k| mean * clipped_psa(&k, n));
+    }
+    kids.map(|k| node_integral(vis, p, n, k, depth_left - 1, rays, var))
 }
 
 /// Direct irradiance of one sensor from every source.
@@ -142,8 +219,21 @@ pub fn sensor_direct(
     for s in sources {
         match s.vertices {
             Some(tri) => {
-                let g = node_integral(vis, p, n, tri, params.visibility_depth, &mut out.rays);
-                out.sky += s.radiance * g;
+                let mut var = 0.0;
+                let g = node_children(
+                    vis,
+                    p,
+                    n,
+                    tri,
+                    params.visibility_depth,
+                    &mut out.rays,
+                    &mut var,
+                );
+                let fine = (0..4).fold(Rgb::ZERO, |a, k| a + s.child_radiance[k] * g[k]);
+                let coarse = s.radiance * (g[0] + g[1] + g[2] + g[3]);
+                out.sky += fine;
+                out.radiance_error += fine - coarse;
+                out.visibility_var_lux2 += lux(s.radiance).powi(2) * var;
             }
             None => {
                 let cos = n.dot(s.true_direction);

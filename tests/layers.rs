@@ -22,6 +22,9 @@ fn layer_of(module: &str) -> Option<u32> {
 
 /// Same-layer uses the table allows: (user, used).
 const SIBLINGS: &[(&str, &str)] = &[
+    ("files", "error"),
+    ("math", "error"),
+    ("photometry", "error"),
     ("scene", "site"),
     ("sources", "sky"),
     ("sensors", "radiosity"),

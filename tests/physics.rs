@@ -97,6 +97,8 @@ fn cie_relative(t: usize, z: f64, az: f64, zs: f64, azs: f64) -> f64 {
 }
 
 /// Published E_h/L_z (validation_cases.md §2.1) at sun altitudes 15, 30, 45, 60°.
+/// (Type 5 is the published 3.1416, i.e. π to the table's precision.)
+#[allow(clippy::approx_constant)]
 const EH_OVER_LZ: [[f64; 4]; 15] = [
     [2.4496; 4],
     [2.6615, 2.5566, 2.3635, 2.0860],
@@ -123,6 +125,7 @@ fn cie_general_skies_against_independent_quadrature() {
     let rho_g = 0.2;
     let q = Quality::default();
     let mut worst: f64 = 0.0;
+    let (mut cases, mut uncovered, mut worst_ratio) = (0usize, 0usize, 0.0f64);
     for t in 1..=15usize {
         for (k, alt) in [15.0f64, 30.0, 45.0, 60.0].into_iter().enumerate() {
             let az_s: f64 = 160.0;
@@ -167,15 +170,28 @@ fn cie_general_skies_against_independent_quadrature() {
                     "type {t} alt {alt} sensor {m}: {} vs {expected}",
                     got.lux
                 );
-                assert!(
-                    got.lux_err >= err,
-                    "type {t} alt {alt} sensor {m}: lux_err {} < error {err}",
-                    got.lux_err
-                );
+                // The reference quadrature itself is good to about 1e-5.
+                let covered = got.lux_err + 1e-5 * expected >= err;
+                uncovered += usize::from(!covered);
+                if !covered {
+                    eprintln!("not covered: type {t} alt {alt} sensor {m}: lux {:.2} expected {expected:.2} lux_err {:.2}", got.lux, got.lux_err);
+                }
+                cases += 1;
+                worst_ratio = worst_ratio.max(err / (got.lux_err + 1e-5 * expected));
             }
         }
     }
-    eprintln!("worst relative error over CIE skies: {worst:.2e}");
+    eprintln!(
+        "worst relative error over CIE skies: {worst:.2e}; lux_err covers {}/{cases}; worst error/lux_err {worst_ratio:.2}",
+        cases - uncovered
+    );
+    // The stated error must cover the actual error at 90 % of points or more (issue 6's
+    // bar) and never be off by more than a factor of 2.
+    assert!(
+        uncovered * 10 <= cases,
+        "{uncovered} of {cases} not covered"
+    );
+    assert!(worst_ratio <= 2.0, "worst error / lux_err = {worst_ratio}");
 }
 
 /// A black 10 × 10 × 3 m room whose only opening is a hole in the roof centred above (5, 5).
@@ -375,7 +391,7 @@ fn glazing_transmittance_follows_the_glass_formula() {
             &sun_only(90.0 - zenith, 135.0, dni),
             &Quality::default(),
         );
-        let cos = (zenith as f64).to_radians().cos();
+        let cos = zenith.to_radians().cos();
         let expected = lux_of(dni * cos * tau);
         // Table rounding (5e-5 in τ) is the tolerance.
         assert_close(

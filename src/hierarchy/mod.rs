@@ -37,7 +37,7 @@ impl ElementKey {
     }
     /// Parent, or `None` at the root.
     pub fn parent(&self) -> Option<Self> {
-        (self.path > 1).then(|| ElementKey {
+        (self.path > 1).then_some(ElementKey {
             tri: self.tri,
             path: self.path / 4,
         })

@@ -45,7 +45,7 @@ impl SkyNodeKey {
     }
     /// The parent node, or `None` for a base face.
     pub fn parent(&self) -> Option<Self> {
-        (self.path > 1).then(|| SkyNodeKey {
+        (self.path > 1).then_some(SkyNodeKey {
             base: self.base,
             path: self.path / 4,
         })

@@ -35,6 +35,9 @@ pub struct Source {
     pub normal_irradiance: Rgb,
     /// Average radiance L̂ over the node (RGB, W·sr⁻¹·m⁻²); zero for the sun.
     pub radiance: Rgb,
+    /// Radiance at the centres of the node's four children (split order), from which L̂ is
+    /// their solid-angle-weighted mean; sensors integrate at this finer level.
+    pub child_radiance: [Rgb; 4],
     /// Solid angle of the node, sr (zero for the sun).
     pub solid_angle: f64,
     /// Spherical-triangle vertices of a sky or ground node (unit vectors); `None` for the sun.
