@@ -3,8 +3,10 @@
 //! A sky or ground node contributes L̂ · ∫_node V(ω) τ(ω) max(0, n·ω) dω. The integral is
 //! geometry only: where visibility is the same at the node's corners and centre it is the
 //! node's exact projected solid angle (Lambert's contour formula, clipped at the sensor's
-//! horizon); where it differs the node is split (same quadtree as the sky) down to a
-//! maximum depth — the paper's visibility-driven refinement, in direction space. The sun
+//! horizon); where it differs the node is split (same quadtree as the sky), the node with
+//! the largest visibility uncertainty first, until the sensor's root-sum-square uncertainty
+//! is below a tolerance or a maximum depth is reached — the paper's visibility-driven
+//! refinement, in direction space, driven by the stated error. The sun
 //! contributes E_n · cos θ · τ along its snapped direction. Radiance is applied per child of
 //! each node (the sources carry their four children's radiance), one level finer than the
 //! sources' L̂, and the difference to L̂ is reported as an error estimate. Visibility is an exact ray cast
@@ -17,6 +19,8 @@ use crate::scene::{Scene, Sensor};
 use crate::sources::Source;
 use glam::DVec3;
 use rayon::prelude::*;
+use std::cmp::Ordering;
+use std::collections::{BinaryHeap, HashMap};
 
 /// Ray-casting view of a scene for visibility queries.
 pub struct Visibility<'a> {
@@ -69,14 +73,18 @@ impl<'a> Visibility<'a> {
 /// Knobs of the sensor gather.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SensorParams {
-    /// Deepest split of a partly visible node, relative to the node (3 → 64 sub-triangles).
+    /// Deepest split of a partly visible node, relative to the node (6 → 4096 sub-triangles).
     pub visibility_depth: u32,
+    /// Partly visible nodes are split, largest uncertainty first, until the root-sum-square
+    /// visibility uncertainty is below this fraction of the sensor's direct illuminance.
+    pub visibility_tolerance: f64,
 }
 
 impl Default for SensorParams {
     fn default() -> Self {
         SensorParams {
-            visibility_depth: 4,
+            visibility_depth: 6,
+            visibility_tolerance: 0.005,
         }
     }
 }
@@ -90,9 +98,9 @@ pub struct SensorDirect {
     pub sky: Rgb,
     /// Rays cast for this sensor.
     pub rays: u64,
-    /// Variance-like visibility uncertainty, lux²: Σ over partly visible nodes at the
-    /// deepest split of (half the range of their visibility samples × projected solid
-    /// angle × L̂)².
+    /// Variance-like visibility uncertainty, lux²: Σ over partly visible nodes left
+    /// unsplit of (half the range of their visibility samples × projected solid angle ×
+    /// radiance)².
     pub visibility_var_lux2: f64,
     /// Signed difference (RGB, W/m²) between weighting each node's children by their own
     /// radiance and weighting the whole node by L̂: the error of the coarser sky
@@ -100,47 +108,63 @@ pub struct SensorDirect {
     pub radiance_error: Rgb,
 }
 
-/// Visibility samples of a node (corners and centre of its part above the sensor's
-/// horizon) and that part's projected solid angle; `None` when nothing is above.
-fn sample_node(
-    vis: &Visibility,
+/// One sensor's ray casts, memoised by exact direction (neighbouring nodes share corners).
+struct Rays<'v, 'a> {
+    vis: &'v Visibility<'a>,
     p: DVec3,
     n: DVec3,
-    tri: &[DVec3; 3],
-    rays: &mut u64,
-) -> Option<(Vec<Rgb>, f64)> {
-    let poly = clip_to_hemisphere(tri, n);
-    if poly.len() < 3 {
-        return None;
-    }
-    let psa = projected_solid_angle_polygon(&poly, n);
-    if psa <= 0.0 {
-        return None;
-    }
-    let centre = poly.iter().fold(DVec3::ZERO, |a, &b| a + b).normalize();
-    let samples: Vec<Rgb> = poly
-        .iter()
-        .chain(std::iter::once(&centre))
-        .map(|d| vis.transmission(p, *d))
-        .collect();
-    *rays += samples.len() as u64;
-    Some((samples, psa))
+    memo: HashMap<[u64; 3], Rgb>,
+    cast: u64,
 }
 
-/// (uniform value, or the mean and the half range in grey) of a node's samples.
-fn summarise(samples: &[Rgb]) -> (bool, Rgb, f64) {
-    let first = samples[0];
-    let uniform = samples
-        .iter()
-        .all(|s| (*s - first).abs().max_element() < 1e-9);
-    let mean = samples.iter().fold(Rgb::ZERO, |a, &b| a + b) / samples.len() as f64;
-    let (lo, hi) = samples
-        .iter()
-        .map(|s| grey(*s))
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
-            (a.min(x), b.max(x))
-        });
-    (uniform, mean, 0.5 * (hi - lo))
+impl Rays<'_, '_> {
+    fn transmission(&mut self, d: DVec3) -> Rgb {
+        let key = [d.x.to_bits(), d.y.to_bits(), d.z.to_bits()];
+        if let Some(t) = self.memo.get(&key) {
+            return *t;
+        }
+        self.cast += 1;
+        let t = self.vis.transmission(self.p, d);
+        self.memo.insert(key, t);
+        t
+    }
+
+    /// Visibility samples (corners and centre of the part above the sensor's horizon):
+    /// (all equal, mean, half range in grey, projected solid angle); `None` when nothing
+    /// of the node is above the horizon.
+    fn sample(&mut self, tri: &[DVec3; 3]) -> Option<(bool, Rgb, f64, f64)> {
+        let poly = clip_to_hemisphere(tri, self.n);
+        if poly.len() < 3 {
+            return None;
+        }
+        let psa = projected_solid_angle_polygon(&poly, self.n);
+        if psa <= 0.0 {
+            return None;
+        }
+        let centre = poly.iter().fold(DVec3::ZERO, |a, &b| a + b).normalize();
+        let samples: Vec<Rgb> = poly
+            .iter()
+            .chain(std::iter::once(&centre))
+            .map(|d| self.transmission(*d))
+            .collect();
+        let first = samples[0];
+        let uniform = samples
+            .iter()
+            .all(|s| (*s - first).abs().max_element() < 1e-9);
+        let mean = samples.iter().fold(Rgb::ZERO, |a, &b| a + b) / samples.len() as f64;
+        let (lo, hi) = samples
+            .iter()
+            .map(|s| grey(*s))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                (a.min(x), b.max(x))
+            });
+        Some((
+            uniform,
+            if uniform { first } else { mean },
+            0.5 * (hi - lo),
+            psa,
+        ))
+    }
 }
 
 fn clipped_psa(tri: &[DVec3; 3], n: DVec3) -> f64 {
@@ -152,62 +176,76 @@ fn clipped_psa(tri: &[DVec3; 3], n: DVec3) -> f64 {
     }
 }
 
-/// ∫_tri V τ max(0, n·ω) dω for one node, adaptively (see the module doc). `var`
-/// accumulates (half range × projected solid angle)² of partly visible nodes at the
-/// deepest split.
-fn node_integral(
-    vis: &Visibility,
-    p: DVec3,
-    n: DVec3,
+/// A partly visible (sub-)node waiting to be split or accepted.
+struct Pending {
+    /// Uncertainty of its contribution, lux (half range × psa × radiance).
+    u: f64,
+    /// Insertion order, for a deterministic tie break.
+    seq: u64,
+    source: usize,
+    /// The child of the source node it lies in; `None` for a whole source node.
+    child: Option<usize>,
     tri: [DVec3; 3],
-    depth_left: u32,
-    rays: &mut u64,
-    var: &mut f64,
-) -> Rgb {
-    let Some((samples, psa)) = sample_node(vis, p, n, &tri, rays) else {
-        return Rgb::ZERO;
-    };
-    let (uniform, mean, half_range) = summarise(&samples);
-    if uniform {
-        return samples[0] * psa;
-    }
-    if depth_left == 0 {
-        *var += (half_range * psa).powi(2);
-        return mean * psa;
-    }
-    split(tri[0], tri[1], tri[2])
-        .iter()
-        .map(|k| node_integral(vis, p, n, *k, depth_left - 1, rays, var))
-        .fold(Rgb::ZERO, |a, b| a + b)
+    depth: u32,
+    mean: Rgb,
+    psa: f64,
 }
 
-/// The same integral split over the node's four children (split order), so each child's
-/// radiance can weight its own part.
-fn node_children(
-    vis: &Visibility,
-    p: DVec3,
-    n: DVec3,
-    tri: [DVec3; 3],
-    depth_left: u32,
-    rays: &mut u64,
-    var: &mut f64,
-) -> [Rgb; 4] {
-    let Some((samples, psa)) = sample_node(vis, p, n, &tri, rays) else {
-        return [Rgb::ZERO; 4];
-    };
-    let kids = split(tri[0], tri[1], tri[2]);
-    let (uniform, mean, half_range) = summarise(&samples);
-    if uniform {
-        return kids.map(|k| samples[0] * clipped_psa(&k, n));
+impl PartialEq for Pending {
+    fn eq(&self, o: &Self) -> bool {
+        self.cmp(o) == Ordering::Equal
     }
-    if depth_left == 0 {
-        *var += (half_range * psa).powi(2);
-        return kids.map(|k| mean * clipped_psa(&k, n));
+}
+impl Eq for Pending {}
+impl PartialOrd for Pending {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
     }
-    kids.map(|k| node_integral(vis, p, n, k, depth_left - 1, rays, var))
+}
+impl Ord for Pending {
+    fn cmp(&self, o: &Self) -> Ordering {
+        self.u.total_cmp(&o.u).then(o.seq.cmp(&self.seq))
+    }
 }
 
-/// Direct irradiance of one sensor from every source.
+/// Accumulates a node's contribution: fine (per-child radiance) and coarse (L̂).
+fn add(
+    out: &mut SensorDirect,
+    s: &Source,
+    child: Option<usize>,
+    value: Rgb,
+    psa_children: Option<[f64; 4]>,
+) {
+    let fine = match (child, psa_children) {
+        (Some(k), _) => s.child_radiance[k] * value,
+        (None, Some(w)) => {
+            let total: f64 = w.iter().sum();
+            if total > 0.0 {
+                (0..4).fold(Rgb::ZERO, |a, k| {
+                    a + s.child_radiance[k] * value * (w[k] / total)
+                })
+            } else {
+                Rgb::ZERO
+            }
+        }
+        (None, None) => s.radiance * value,
+    };
+    out.sky += fine;
+    out.radiance_error += fine - s.radiance * value;
+}
+
+/// Accepts a partly visible node at its sample mean and states its uncertainty.
+fn finish(out: &mut SensorDirect, s: &Source, item: &Pending, n: DVec3) {
+    let w = item
+        .child
+        .is_none()
+        .then(|| split(item.tri[0], item.tri[1], item.tri[2]).map(|k| clipped_psa(&k, n)));
+    add(out, s, item.child, item.mean * item.psa, w);
+    out.visibility_var_lux2 += item.u * item.u;
+}
+
+/// Direct irradiance of one sensor from every source. Partly visible nodes are split
+/// largest-uncertainty first (see [`SensorParams`]).
 pub fn sensor_direct(
     vis: &Visibility,
     sensor: &Sensor,
@@ -216,36 +254,101 @@ pub fn sensor_direct(
 ) -> SensorDirect {
     let mut out = SensorDirect::default();
     let (p, n) = (sensor.position, sensor.normal);
-    for s in sources {
-        match s.vertices {
-            Some(tri) => {
-                let mut var = 0.0;
-                let g = node_children(
-                    vis,
-                    p,
-                    n,
-                    tri,
-                    params.visibility_depth,
-                    &mut out.rays,
-                    &mut var,
-                );
-                let fine = (0..4).fold(Rgb::ZERO, |a, k| a + s.child_radiance[k] * g[k]);
-                let coarse = s.radiance * (g[0] + g[1] + g[2] + g[3]);
-                out.sky += fine;
-                out.radiance_error += fine - coarse;
-                out.visibility_var_lux2 += lux(s.radiance).powi(2) * var;
+    let mut rays = Rays {
+        vis,
+        p,
+        n,
+        memo: HashMap::new(),
+        cast: 0,
+    };
+    let mut heap = BinaryHeap::new();
+    let mut seq = 0;
+    let mut pending_var = 0.0;
+    let mut pending_value = 0.0;
+    for (i, s) in sources.iter().enumerate() {
+        let Some(tri) = s.vertices else {
+            let cos = n.dot(s.true_direction);
+            if cos > 0.0 {
+                rays.cast += 1;
+                out.sun += s.normal_irradiance
+                    * vis.transmission_for(p, s.direction, s.true_direction)
+                    * cos;
             }
-            None => {
-                let cos = n.dot(s.true_direction);
-                if cos > 0.0 {
-                    out.rays += 1;
-                    out.sun += s.normal_irradiance
-                        * vis.transmission_for(p, s.direction, s.true_direction)
-                        * cos;
-                }
+            continue;
+        };
+        let Some((uniform, mean, half, psa)) = rays.sample(&tri) else {
+            continue;
+        };
+        let kids = split(tri[0], tri[1], tri[2]);
+        if uniform {
+            let w = kids.map(|k| clipped_psa(&k, n));
+            add(&mut out, s, None, mean * psa, Some(w));
+        } else {
+            let u = half * psa * lux(s.radiance);
+            pending_var += u * u;
+            pending_value += lux(s.radiance * mean * psa);
+            seq += 1;
+            heap.push(Pending {
+                u,
+                seq,
+                source: i,
+                child: None,
+                tri,
+                depth: 0,
+                mean,
+                psa,
+            });
+        }
+    }
+    while !heap.is_empty() {
+        let estimate = lux(out.sun + out.sky) + pending_value;
+        if pending_var.sqrt() <= params.visibility_tolerance * estimate {
+            break;
+        }
+        let top = heap.pop().expect("peeked");
+        if top.depth >= params.visibility_depth {
+            // As deep as allowed: accept at its sample mean, uncertainty stated.
+            pending_var -= top.u * top.u;
+            pending_value -= lux(sources[top.source].radiance * top.mean * top.psa);
+            finish(&mut out, &sources[top.source], &top, n);
+            continue;
+        }
+        pending_var -= top.u * top.u;
+        let s = &sources[top.source];
+        pending_value -= lux(s.radiance * top.mean * top.psa);
+        for (k, sub) in split(top.tri[0], top.tri[1], top.tri[2])
+            .into_iter()
+            .enumerate()
+        {
+            let child = top.child.or(Some(k));
+            let Some((uniform, mean, half, psa)) = rays.sample(&sub) else {
+                continue;
+            };
+            if uniform {
+                add(&mut out, s, child, mean * psa, None);
+            } else {
+                let u = half * psa * lux(s.child_radiance[child.expect("set above")]);
+                pending_var += u * u;
+                pending_value += lux(s.radiance * mean * psa);
+                seq += 1;
+                heap.push(Pending {
+                    u,
+                    seq,
+                    source: top.source,
+                    child,
+                    tri: sub,
+                    depth: top.depth + 1,
+                    mean,
+                    psa,
+                });
             }
         }
     }
+    // Accept what is left at its sample mean; its range is the stated uncertainty.
+    for item in heap.into_sorted_vec() {
+        finish(&mut out, &sources[item.source], &item, n);
+    }
+    out.rays = rays.cast;
     out
 }
 

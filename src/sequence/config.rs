@@ -83,7 +83,8 @@ impl Quality {
                     ..base.projection
                 },
                 sensors: SensorParams {
-                    visibility_depth: 2,
+                    visibility_depth: 4,
+                    visibility_tolerance: 0.02,
                 },
             },
             "high" => Quality {
@@ -103,7 +104,8 @@ impl Quality {
                     ..base.projection
                 },
                 sensors: SensorParams {
-                    visibility_depth: 5,
+                    visibility_depth: 7,
+                    visibility_tolerance: 0.002,
                 },
             },
             "reference" => Quality {
@@ -123,7 +125,8 @@ impl Quality {
                     ..base.projection
                 },
                 sensors: SensorParams {
-                    visibility_depth: 6,
+                    visibility_depth: 8,
+                    visibility_tolerance: 0.0005,
                 },
             },
             _ => return None,
@@ -139,6 +142,7 @@ impl Quality {
             sun_spacing_deg: self.sun_spacing_deg * 2.0,
             sensors: SensorParams {
                 visibility_depth: self.sensors.visibility_depth.saturating_sub(1),
+                visibility_tolerance: self.sensors.visibility_tolerance * 2.0,
             },
             ..*self
         }

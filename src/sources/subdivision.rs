@@ -24,9 +24,10 @@ pub struct SkyParams {
     pub max_irradiance_fraction: f64,
     /// Depth of the uniform ground-glow faces below the horizon.
     pub ground_depth: u32,
-    /// Also split while the radiance samples of a node differ by more than this fraction
-    /// of their mean ((max − min)/mean): steep gradients near the horizon and around the
-    /// sun make L̂ a poor average otherwise. Not in the paper; see the README's notes.
+    /// Also split while the spread of a node's radiance samples times its solid angle,
+    /// (L_max − L_min)·ω, exceeds this fraction of the whole sky's ∫L dω: steep gradients
+    /// near the horizon and around the sun make L̂ a poor average otherwise, and the
+    /// product bounds the node's share of that error. Not in the paper; see the README.
     pub max_variation: f64,
     /// Sources below this fraction of the whole sky's ∫L dω are left out (and counted).
     pub negligible_fraction: f64,
@@ -40,7 +41,7 @@ impl Default for SkyParams {
             min_solid_angle_sr: 2e-3,
             max_irradiance_fraction: 0.01,
             ground_depth: 1,
-            max_variation: 0.25,
+            max_variation: 0.002,
             negligible_fraction: 1e-7,
         }
     }
@@ -94,12 +95,7 @@ fn node_radiance(sky: &Sky, key: SkyNodeKey, v: &[DVec3; 3]) -> (Rgb, f64, [Rgb;
         .iter()
         .map(|x| grey(*x))
         .fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)));
-    let variation = if grey(mean) > 0.0 {
-        (hi - lo) / grey(mean)
-    } else {
-        0.0
-    };
-    (mean, variation, l)
+    (mean, hi - lo, l)
 }
 
 fn make_source(key: SkyNodeKey, v: [DVec3; 3], radiance: Rgb, children: [Rgb; 4]) -> Source {
@@ -153,7 +149,7 @@ pub fn sky_sources(sky: &Sky, params: &SkyParams) -> SkySources {
                 || (depth < params.max_depth
                     && omega > params.min_solid_angle_sr
                     && (grey(l) * omega > params.max_irradiance_fraction * reference
-                        || variation > params.max_variation))
+                        || variation * omega > params.max_variation * reference))
         } else {
             depth < params.ground_depth && grey(l) > 0.0
         };
