@@ -13,7 +13,9 @@
 //! (two-sided opaque occluders, glazing multiplies by τ(θ)).
 
 use crate::math::bvh::Bvh;
-use crate::math::spherical_triangle::{clip_to_hemisphere, projected_solid_angle_polygon, split};
+use crate::math::spherical_triangle::{
+    self, clip_to_hemisphere, projected_solid_angle_polygon, split,
+};
 use crate::photometry::{grey, lux, Rgb};
 use crate::scene::{Scene, Sensor};
 use crate::sources::Source;
@@ -78,6 +80,10 @@ pub struct SensorParams {
     /// Partly visible nodes are split, largest uncertainty first, until the root-sum-square
     /// visibility uncertainty is below this fraction of the sensor's direct illuminance.
     pub visibility_tolerance: f64,
+    /// Nodes wider than this (degrees, corner to corner through the centre) are split before
+    /// their samples are trusted: four samples of a wide node can all miss a thin band of
+    /// sky between an obstruction and a window head.
+    pub sample_angle_deg: f64,
 }
 
 impl Default for SensorParams {
@@ -85,6 +91,7 @@ impl Default for SensorParams {
         SensorParams {
             visibility_depth: 6,
             visibility_tolerance: 0.005,
+            sample_angle_deg: 4.0,
         }
     }
 }
@@ -265,6 +272,7 @@ pub fn sensor_direct(
     let mut seq = 0;
     let mut pending_var = 0.0;
     let mut pending_value = 0.0;
+    let max_cos = (0.5 * params.sample_angle_deg).to_radians().cos();
     for (i, s) in sources.iter().enumerate() {
         let Some(tri) = s.vertices else {
             let cos = n.dot(s.true_direction);
@@ -276,28 +284,44 @@ pub fn sensor_direct(
             }
             continue;
         };
-        let Some((uniform, mean, half, psa)) = rays.sample(&tri) else {
-            continue;
-        };
-        let kids = split(tri[0], tri[1], tri[2]);
-        if uniform {
-            let w = kids.map(|k| clipped_psa(&k, n));
-            add(&mut out, s, None, mean * psa, Some(w));
-        } else {
-            let u = half * psa * lux(s.radiance);
-            pending_var += u * u;
-            pending_value += lux(s.radiance * mean * psa);
-            seq += 1;
-            heap.push(Pending {
-                u,
-                seq,
-                source: i,
-                child: None,
-                tri,
-                depth: 0,
-                mean,
-                psa,
-            });
+        // Split wide nodes before trusting their samples (see `sample_angle_deg`).
+        let mut stack = vec![(tri, None::<usize>, 0u32)];
+        while let Some((t, child, depth)) = stack.pop() {
+            let c = spherical_triangle::centre(t[0], t[1], t[2]);
+            let wide = t.iter().any(|v| v.dot(c) < max_cos);
+            if wide && depth < params.visibility_depth {
+                if clip_to_hemisphere(&t, n).len() >= 3 {
+                    for (k, sub) in split(t[0], t[1], t[2]).into_iter().enumerate().rev() {
+                        stack.push((sub, child.or(Some(k)), depth + 1));
+                    }
+                }
+                continue;
+            }
+            let Some((uniform, mean, half, psa)) = rays.sample(&t) else {
+                continue;
+            };
+            if uniform {
+                let w = child
+                    .is_none()
+                    .then(|| split(t[0], t[1], t[2]).map(|k| clipped_psa(&k, n)));
+                add(&mut out, s, child, mean * psa, w);
+            } else {
+                let l = child.map_or(s.radiance, |k| s.child_radiance[k]);
+                let u = half * psa * lux(l);
+                pending_var += u * u;
+                pending_value += lux(s.radiance * mean * psa);
+                seq += 1;
+                heap.push(Pending {
+                    u,
+                    seq,
+                    source: i,
+                    child,
+                    tri: t,
+                    depth,
+                    mean,
+                    psa,
+                });
+            }
         }
     }
     while !heap.is_empty() {

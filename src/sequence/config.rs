@@ -85,6 +85,7 @@ impl Quality {
                 sensors: SensorParams {
                     visibility_depth: 4,
                     visibility_tolerance: 0.02,
+                    sample_angle_deg: 8.0,
                 },
             },
             "high" => Quality {
@@ -106,6 +107,7 @@ impl Quality {
                 sensors: SensorParams {
                     visibility_depth: 7,
                     visibility_tolerance: 0.002,
+                    sample_angle_deg: 2.0,
                 },
             },
             "reference" => Quality {
@@ -127,6 +129,7 @@ impl Quality {
                 sensors: SensorParams {
                     visibility_depth: 8,
                     visibility_tolerance: 0.0005,
+                    sample_angle_deg: 1.0,
                 },
             },
             _ => return None,
@@ -143,6 +146,7 @@ impl Quality {
             sensors: SensorParams {
                 visibility_depth: self.sensors.visibility_depth.saturating_sub(1),
                 visibility_tolerance: self.sensors.visibility_tolerance * 2.0,
+                sample_angle_deg: self.sensors.sample_angle_deg * 2.0,
             },
             ..*self
         }

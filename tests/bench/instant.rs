@@ -124,7 +124,7 @@ fn main() {
     let office =
         Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office/scene.toml"))
             .unwrap();
-    bench_scene("sample office", &office, 7);
+    bench_scene("sample office", &office, 5);
     let building = synthetic::multi_storey_building(10_000);
     bench_scene("generated building", &building, 3);
 }
