@@ -4,7 +4,7 @@
 //! geometry only: where visibility is the same at the node's corners and centre it is the
 //! node's exact projected solid angle (Lambert's contour formula, clipped at the sensor's
 //! horizon); where it differs the node is split (same quadtree as the sky), the node with
-//! the largest visibility uncertainty first, until the sensor's root-sum-square uncertainty
+//! the largest visibility uncertainty first, until the sensor's summed uncertainty
 //! is below a tolerance or a maximum depth is reached — the paper's visibility-driven
 //! refinement, in direction space, driven by the stated error. The sun
 //! contributes E_n · cos θ · τ along its snapped direction. Radiance is applied per child of
@@ -48,27 +48,54 @@ impl<'a> Visibility<'a> {
     /// Transmission (per channel) from `origin` to infinity along unit `dir`: glazing
     /// multiplies by τ(θ), an opaque surface stops the light.
     pub fn transmission(&self, origin: DVec3, dir: DVec3) -> Rgb {
-        self.transmission_for(origin, dir, dir)
+        self.trace(origin, dir, dir).0
     }
 
     /// As [`Self::transmission`], with the glazing's angle of incidence taken from
     /// `incidence` instead of `dir` (the sun: visibility follows the snapped direction, the
     /// glass sees the true one).
     pub fn transmission_for(&self, origin: DVec3, dir: DVec3, incidence: DVec3) -> Rgb {
+        self.trace(origin, dir, incidence).0
+    }
+
+    /// Transmission, the opaque triangle that stopped the ray (if any), and whether any
+    /// glazing was crossed.
+    fn trace(&self, origin: DVec3, dir: DVec3, incidence: DVec3) -> (Rgb, Option<u32>, bool) {
         let mut t = Rgb::ONE;
+        let mut stopper = None;
+        let mut glazing = false;
         self.bvh
             .hits_in_order(origin, dir, T_MIN_M, f64::INFINITY, |hit| {
                 let tri = &self.scene.triangles[hit.triangle as usize];
                 let m = &self.scene.materials[tri.material as usize];
                 if m.is_glazing() {
+                    glazing = true;
                     t *= m.transmittance(self.normals[hit.triangle as usize].dot(incidence).abs());
                     t.max_element() > 0.0
                 } else {
                     t = Rgb::ZERO;
+                    stopper = Some(hit.triangle);
                     false
                 }
             });
-        t
+        (t, stopper, glazing)
+    }
+
+    /// True when no triangle can lie inside the pyramid from `apex` spanned by the unit
+    /// directions `poly` (a convex spherical polygon) above the plane through `apex` with
+    /// normal `n`: the whole pyramid is then provably unobstructed.
+    fn pyramid_is_empty(&self, apex: DVec3, n: DVec3, poly: &[DVec3]) -> bool {
+        let centre = poly.iter().fold(DVec3::ZERO, |a, &b| a + b);
+        let mut planes = Vec::with_capacity(poly.len() + 1);
+        for k in 0..poly.len() {
+            let mut e = poly[k].cross(poly[(k + 1) % poly.len()]);
+            if e.dot(centre) < 0.0 {
+                e = -e;
+            }
+            planes.push((e, e.dot(apex)));
+        }
+        planes.push((n, n.dot(apex) + T_MIN_M));
+        !self.bvh.any_in_region(&planes)
     }
 }
 
@@ -77,7 +104,7 @@ impl<'a> Visibility<'a> {
 pub struct SensorParams {
     /// Deepest split of a partly visible node, relative to the node (6 → 4096 sub-triangles).
     pub visibility_depth: u32,
-    /// Partly visible nodes are split, largest uncertainty first, until the root-sum-square
+    /// Partly visible nodes are split, largest uncertainty first, until their summed
     /// visibility uncertainty is below this fraction of the sensor's direct illuminance.
     pub visibility_tolerance: f64,
     /// Nodes wider than this (degrees, corner to corner through the centre) are split before
@@ -105,10 +132,10 @@ pub struct SensorDirect {
     pub sky: Rgb,
     /// Rays cast for this sensor.
     pub rays: u64,
-    /// Variance-like visibility uncertainty, lux²: Σ over partly visible nodes left
-    /// unsplit of (half the range of their visibility samples × projected solid angle ×
-    /// radiance)².
-    pub visibility_var_lux2: f64,
+    /// Visibility uncertainty, lux: Σ over partly visible nodes left unsplit of half the
+    /// range of their visibility samples × projected solid angle × radiance. A linear sum:
+    /// neighbouring boundary nodes err the same way, so their errors add up.
+    pub visibility_err_lux: f64,
     /// Signed difference (RGB, W/m²) between weighting each node's children by their own
     /// radiance and weighting the whole node by L̂: the error of the coarser sky
     /// representation, an upper estimate of the finer one's.
@@ -120,26 +147,25 @@ struct Rays<'v, 'a> {
     vis: &'v Visibility<'a>,
     p: DVec3,
     n: DVec3,
-    memo: HashMap<[u64; 3], Rgb>,
+    memo: HashMap<[u64; 3], (Rgb, Option<u32>, bool)>,
     cast: u64,
 }
 
 impl Rays<'_, '_> {
-    fn transmission(&mut self, d: DVec3) -> Rgb {
+    fn trace(&mut self, d: DVec3) -> (Rgb, Option<u32>, bool) {
         let key = [d.x.to_bits(), d.y.to_bits(), d.z.to_bits()];
         if let Some(t) = self.memo.get(&key) {
             return *t;
         }
         self.cast += 1;
-        let t = self.vis.transmission(self.p, d);
+        let t = self.vis.trace(self.p, d, d);
         self.memo.insert(key, t);
         t
     }
 
-    /// Visibility samples (corners and centre of the part above the sensor's horizon):
-    /// (all equal, mean, half range in grey, projected solid angle); `None` when nothing
-    /// of the node is above the horizon.
-    fn sample(&mut self, tri: &[DVec3; 3]) -> Option<(bool, Rgb, f64, f64)> {
+    /// Samples a node at the corners and centre of its part above the sensor's horizon.
+    /// `None` when nothing of the node is above the horizon.
+    fn sample(&mut self, tri: &[DVec3; 3]) -> Option<NodeSample> {
         let poly = clip_to_hemisphere(tri, self.n);
         if poly.len() < 3 {
             return None;
@@ -149,29 +175,51 @@ impl Rays<'_, '_> {
             return None;
         }
         let centre = poly.iter().fold(DVec3::ZERO, |a, &b| a + b).normalize();
-        let samples: Vec<Rgb> = poly
+        let traced: Vec<(Rgb, Option<u32>, bool)> = poly
             .iter()
             .chain(std::iter::once(&centre))
-            .map(|d| self.transmission(*d))
+            .map(|d| self.trace(*d))
             .collect();
-        let first = samples[0];
-        let uniform = samples
+        let first = traced[0].0;
+        let uniform = traced
             .iter()
-            .all(|s| (*s - first).abs().max_element() < 1e-9);
-        let mean = samples.iter().fold(Rgb::ZERO, |a, &b| a + b) / samples.len() as f64;
-        let (lo, hi) = samples
+            .all(|s| (s.0 - first).abs().max_element() < 1e-9);
+        let mean = traced.iter().fold(Rgb::ZERO, |a, s| a + s.0) / traced.len() as f64;
+        let (lo, hi) = traced
             .iter()
-            .map(|s| grey(*s))
+            .map(|s| grey(s.0))
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
                 (a.min(x), b.max(x))
             });
-        Some((
+        // Proofs that the samples speak for the whole node: every sample stopped by the
+        // same opaque triangle (convex, so it covers the node's whole pyramid behind it),
+        // or every sample clear and no triangle inside the pyramid at all.
+        let same_stopper = traced[0].1.is_some() && traced.iter().all(|s| s.1 == traced[0].1);
+        let all_clear = traced.iter().all(|s| s.1.is_none() && !s.2);
+        let proven = uniform
+            && (same_stopper || (all_clear && self.vis.pyramid_is_empty(self.p, self.n, &poly)));
+        Some(NodeSample {
             uniform,
-            if uniform { first } else { mean },
-            0.5 * (hi - lo),
+            proven,
+            mean: if uniform { first } else { mean },
+            half_range: 0.5 * (hi - lo),
             psa,
-        ))
+        })
     }
+}
+
+/// What the samples of one node say.
+struct NodeSample {
+    /// All samples equal.
+    uniform: bool,
+    /// Uniform, and proven to hold for the whole node (see [`Rays::sample`]).
+    proven: bool,
+    /// Sample mean transmission.
+    mean: Rgb,
+    /// Half the range of the samples, grey.
+    half_range: f64,
+    /// Projected solid angle of the node's part above the horizon, sr.
+    psa: f64,
 }
 
 fn clipped_psa(tri: &[DVec3; 3], n: DVec3) -> f64 {
@@ -248,7 +296,7 @@ fn finish(out: &mut SensorDirect, s: &Source, item: &Pending, n: DVec3) {
         .is_none()
         .then(|| split(item.tri[0], item.tri[1], item.tri[2]).map(|k| clipped_psa(&k, n)));
     add(out, s, item.child, item.mean * item.psa, w);
-    out.visibility_var_lux2 += item.u * item.u;
+    out.visibility_err_lux += item.u;
 }
 
 /// Direct irradiance of one sensor from every source. Partly visible nodes are split
@@ -270,7 +318,7 @@ pub fn sensor_direct(
     };
     let mut heap = BinaryHeap::new();
     let mut seq = 0;
-    let mut pending_var = 0.0;
+    let mut pending_err = 0.0;
     let mut pending_value = 0.0;
     let max_cos = (0.5 * params.sample_angle_deg).to_radians().cos();
     for (i, s) in sources.iter().enumerate() {
@@ -284,32 +332,31 @@ pub fn sensor_direct(
             }
             continue;
         };
-        // Split wide nodes before trusting their samples (see `sample_angle_deg`).
+        // Sample; accept what is proven, split what is wide, trust the samples of the rest
+        // (see `sample_angle_deg`).
         let mut stack = vec![(tri, None::<usize>, 0u32)];
         while let Some((t, child, depth)) = stack.pop() {
+            let Some(ns) = rays.sample(&t) else {
+                continue;
+            };
             let c = spherical_triangle::centre(t[0], t[1], t[2]);
             let wide = t.iter().any(|v| v.dot(c) < max_cos);
-            if wide && depth < params.visibility_depth {
-                if clip_to_hemisphere(&t, n).len() >= 3 {
-                    for (k, sub) in split(t[0], t[1], t[2]).into_iter().enumerate().rev() {
-                        stack.push((sub, child.or(Some(k)), depth + 1));
-                    }
+            if !ns.proven && wide && depth < params.visibility_depth {
+                for (k, sub) in split(t[0], t[1], t[2]).into_iter().enumerate().rev() {
+                    stack.push((sub, child.or(Some(k)), depth + 1));
                 }
                 continue;
             }
-            let Some((uniform, mean, half, psa)) = rays.sample(&t) else {
-                continue;
-            };
-            if uniform {
+            if ns.uniform {
                 let w = child
                     .is_none()
                     .then(|| split(t[0], t[1], t[2]).map(|k| clipped_psa(&k, n)));
-                add(&mut out, s, child, mean * psa, w);
+                add(&mut out, s, child, ns.mean * ns.psa, w);
             } else {
                 let l = child.map_or(s.radiance, |k| s.child_radiance[k]);
-                let u = half * psa * lux(l);
-                pending_var += u * u;
-                pending_value += lux(s.radiance * mean * psa);
+                let u = ns.half_range * ns.psa * lux(l);
+                pending_err += u;
+                pending_value += lux(s.radiance * ns.mean * ns.psa);
                 seq += 1;
                 heap.push(Pending {
                     u,
@@ -318,26 +365,26 @@ pub fn sensor_direct(
                     child,
                     tri: t,
                     depth,
-                    mean,
-                    psa,
+                    mean: ns.mean,
+                    psa: ns.psa,
                 });
             }
         }
     }
     while !heap.is_empty() {
         let estimate = lux(out.sun + out.sky) + pending_value;
-        if pending_var.sqrt() <= params.visibility_tolerance * estimate {
+        if pending_err <= params.visibility_tolerance * estimate {
             break;
         }
         let top = heap.pop().expect("peeked");
         if top.depth >= params.visibility_depth {
             // As deep as allowed: accept at its sample mean, uncertainty stated.
-            pending_var -= top.u * top.u;
+            pending_err -= top.u;
             pending_value -= lux(sources[top.source].radiance * top.mean * top.psa);
             finish(&mut out, &sources[top.source], &top, n);
             continue;
         }
-        pending_var -= top.u * top.u;
+        pending_err -= top.u;
         let s = &sources[top.source];
         pending_value -= lux(s.radiance * top.mean * top.psa);
         for (k, sub) in split(top.tri[0], top.tri[1], top.tri[2])
@@ -345,15 +392,15 @@ pub fn sensor_direct(
             .enumerate()
         {
             let child = top.child.or(Some(k));
-            let Some((uniform, mean, half, psa)) = rays.sample(&sub) else {
+            let Some(ns) = rays.sample(&sub) else {
                 continue;
             };
-            if uniform {
-                add(&mut out, s, child, mean * psa, None);
+            if ns.uniform {
+                add(&mut out, s, child, ns.mean * ns.psa, None);
             } else {
-                let u = half * psa * lux(s.child_radiance[child.expect("set above")]);
-                pending_var += u * u;
-                pending_value += lux(s.radiance * mean * psa);
+                let u = ns.half_range * ns.psa * lux(s.child_radiance[child.expect("set above")]);
+                pending_err += u;
+                pending_value += lux(s.radiance * ns.mean * ns.psa);
                 seq += 1;
                 heap.push(Pending {
                     u,
@@ -362,8 +409,8 @@ pub fn sensor_direct(
                     child,
                     tri: sub,
                     depth: top.depth + 1,
-                    mean,
-                    psa,
+                    mean: ns.mean,
+                    psa: ns.psa,
                 });
             }
         }

@@ -383,6 +383,44 @@ impl Bvh {
         }
     }
 
+    /// Conservative region query: `false` proves that no triangle meets the convex region
+    /// {x : n·x ≥ d for every (n, d) in `planes`}; `true` means some triangle may (a
+    /// triangle counts as outside only when all its vertices are outside one plane).
+    pub fn any_in_region(&self, planes: &[(DVec3, f64)]) -> bool {
+        if self.nodes.is_empty() {
+            return false;
+        }
+        let box_outside = |n: &Node| {
+            planes.iter().any(|(p, d)| {
+                let far = DVec3::new(
+                    if p.x >= 0.0 { n.hi.x } else { n.lo.x },
+                    if p.y >= 0.0 { n.hi.y } else { n.lo.y },
+                    if p.z >= 0.0 { n.hi.z } else { n.lo.z },
+                );
+                p.dot(far) < *d
+            })
+        };
+        let mut stack = vec![0u32];
+        while let Some(ni) = stack.pop() {
+            let node = &self.nodes[ni as usize];
+            if box_outside(node) {
+                continue;
+            }
+            if node.count > 0 {
+                let s = node.start as usize;
+                for t in &self.tris[s..s + node.count as usize] {
+                    if !planes.iter().any(|(p, d)| t.iter().all(|v| p.dot(*v) < *d)) {
+                        return true;
+                    }
+                }
+            } else {
+                stack.push(node.start);
+                stack.push(node.start + 1);
+            }
+        }
+        false
+    }
+
     /// Visits every triangle hit by the ray `origin + t·dir` with `t_min < t < t_max`, in
     /// increasing `t` (ties by triangle index), calling `visit(hit)`; stops early when
     /// `visit` returns `false`. `dir` must be a unit vector (t is then in metres).

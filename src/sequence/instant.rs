@@ -215,7 +215,7 @@ pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report)
                 // linearly; partly visible nodes add their visibility range.
                 lux_err: diff
                     + lux(f.radiance_error).abs()
-                    + f.visibility_var_lux2.sqrt()
+                    + f.visibility_err_lux
                     + SKY_NORMALISATION_REL * total.abs(),
                 lux_sun: lux(f.sun),
                 lux_sky: lux(f.sky),
@@ -224,7 +224,7 @@ pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report)
     }
     report.error_model = "lux_err = |lux - lux at one coarser level| (sky subdivision depth and \
         thresholds, sun grid spacing x2, visibility depth -1) + |difference between per-child and \
-        per-node sky radiance| + root-sum-square of the visibility \
+        per-node sky radiance| + sum of the visibility \
         range of partly visible nodes at the deepest split + 2e-4 x lux (sky normalisation \
         quadrature); indirect light not yet included"
         .into();
