@@ -2,6 +2,7 @@
 //! by 4-way midpoint subdivision. An element is addressed by an exact key (triangle, path),
 //! so refinements found for different sources (and cached) merge into one hierarchy.
 
+use crate::math::quadtree;
 use crate::scene::Scene;
 use glam::DVec3;
 use std::collections::HashMap;
@@ -16,39 +17,38 @@ pub struct ElementKey {
     pub path: u64,
 }
 
-/// Deepest subdivision representable by a path (2 bits per level in 64 bits).
-pub const MAX_DEPTH: u32 = 30;
+/// Deepest subdivision representable by a path.
+pub const MAX_DEPTH: u32 = quadtree::MAX_DEPTH - 1;
 
 impl ElementKey {
     /// The input triangle itself.
     pub fn root(tri: u32) -> Self {
-        ElementKey { tri, path: 1 }
+        ElementKey {
+            tri,
+            path: quadtree::ROOT,
+        }
     }
     /// Subdivision depth (0 for an input triangle).
     pub fn depth(&self) -> u32 {
-        (63 - self.path.leading_zeros()) / 2
+        quadtree::depth(self.path)
     }
     /// Child `k` (0..4).
     pub fn child(&self, k: u8) -> Self {
         ElementKey {
             tri: self.tri,
-            path: self.path * 4 + k as u64,
+            path: quadtree::child(self.path, k),
         }
     }
     /// Parent, or `None` at the root.
     pub fn parent(&self) -> Option<Self> {
-        (self.path > 1).then_some(ElementKey {
+        quadtree::parent(self.path).map(|path| ElementKey {
             tri: self.tri,
-            path: self.path / 4,
+            path,
         })
     }
     /// Vertices of the element (scene frame), from the root triangle's vertices.
     pub fn vertices(&self, root: [DVec3; 3]) -> [DVec3; 3] {
-        let mut t = root;
-        for level in (0..self.depth()).rev() {
-            t = split(t)[((self.path >> (2 * level)) & 3) as usize];
-        }
-        t
+        quadtree::descend(root, self.path, |t| split(*t))
     }
 }
 

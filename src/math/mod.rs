@@ -2,6 +2,7 @@
 
 pub mod bvh;
 pub mod frame;
+pub mod quadtree;
 pub mod raster;
 pub mod rng;
 pub mod spherical_triangle;

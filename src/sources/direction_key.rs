@@ -1,7 +1,7 @@
 //! Exact, reusable keys for projection directions: a node of the fixed octahedral quadtree
 //! (base face + path), and a cell of the fixed sun-snapping grid.
 
-use crate::math::spherical_triangle;
+use crate::math::{quadtree, spherical_triangle};
 use glam::DVec3;
 
 /// The 8 faces of the octahedron; 0–3 above the horizon, 4–7 below. Vertex order is
@@ -30,36 +30,35 @@ pub struct SkyNodeKey {
 impl SkyNodeKey {
     /// The base face `base`.
     pub fn root(base: u8) -> Self {
-        SkyNodeKey { base, path: 1 }
+        SkyNodeKey {
+            base,
+            path: quadtree::ROOT,
+        }
     }
     /// Subdivision depth (0 for a base face).
     pub fn depth(&self) -> u32 {
-        (63 - self.path.leading_zeros()) / 2
+        quadtree::depth(self.path)
     }
     /// Child `k` (0..4) in [`spherical_triangle::split`] order.
     pub fn child(&self, k: u8) -> Self {
         SkyNodeKey {
             base: self.base,
-            path: self.path * 4 + k as u64,
+            path: quadtree::child(self.path, k),
         }
     }
     /// The parent node, or `None` for a base face.
     pub fn parent(&self) -> Option<Self> {
-        (self.path > 1).then_some(SkyNodeKey {
+        quadtree::parent(self.path).map(|path| SkyNodeKey {
             base: self.base,
-            path: self.path / 4,
+            path,
         })
     }
     /// Unit vertices of the node's spherical triangle, recomputed from the base face so
     /// the same key always gives bit-identical directions.
     pub fn vertices(&self) -> [DVec3; 3] {
-        let mut t = BASE[self.base as usize];
-        let d = self.depth();
-        for level in (0..d).rev() {
-            let k = ((self.path >> (2 * level)) & 3) as usize;
-            t = spherical_triangle::split(t[0], t[1], t[2])[k];
-        }
-        t
+        quadtree::descend(BASE[self.base as usize], self.path, |t| {
+            spherical_triangle::split(t[0], t[1], t[2])
+        })
     }
     /// True for the four faces above the horizon and their descendants.
     pub fn is_sky(&self) -> bool {
