@@ -91,8 +91,8 @@ impl EnergyAcc {
     /// Adds one batch: [daylight_in, emitted, absorbed, escaped, unshot].
     pub fn add(&mut self, v: [Rgb; 5]) {
         self.n += 1;
-        for k in 0..5 {
-            self.sum[k] += v[k];
+        for (s, x) in self.sum.iter_mut().zip(v) {
+            *s += x;
         }
         let r = v[0] + v[1] - v[2] - v[3] - v[4];
         self.res_sum += r;

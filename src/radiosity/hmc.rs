@@ -30,7 +30,6 @@ use super::{child_of, grey_abs, RadiosityParams, RadiosityState};
 use crate::hierarchy::MAX_DEPTH;
 use crate::math::rng::{mix64, uniform};
 use crate::photometry::Rgb;
-use glam::DVec3;
 use rayon::prelude::*;
 use std::f64::consts::PI;
 use std::time::Instant;
@@ -49,8 +48,6 @@ pub fn solve(state: &mut RadiosityState, tracer: &Tracer, params: &RadiosityPara
 struct LineRec {
     src: u32,
     src_bary: [f64; 3],
-    x: DVec3,
-    cos_s: f64,
     src_grey: f64,
     out: Outcome,
 }
@@ -322,14 +319,12 @@ fn trace_step(
                     let v = el.vertices;
                     let x = v[0] * bary[0] + v[1] * bary[1] + v[2] * bary[2];
                     let nrm = tracer.normal(el.key.tri);
-                    let (dir, cos_s) = cosine_direction(nrm, u(3), u(4));
+                    let (dir, _) = cosine_direction(nrm, u(3), u(4));
                     // P = U·A/(p·N) with p = A·Σ|U|/W: every line carries W/N in total.
                     let power = unshot * (w_total / (unshot.abs().element_sum() * n as f64));
                     LineRec {
                         src,
                         src_bary: bary,
-                        x,
-                        cos_s,
                         src_grey: grey_abs(unshot),
                         out: tracer.trace(x, dir, power),
                     }

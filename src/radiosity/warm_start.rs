@@ -64,6 +64,7 @@ pub fn warm_start(
     }
     // Carry the previous result as the base; shoot the change.
     let n = state.cells.len();
+    #[allow(clippy::needless_range_loop)] // reads the state before writing its cell
     for i in 0..n {
         let b = state.radiosity(i as u32);
         let bs = state.radiosity_std_err(i as u32);
