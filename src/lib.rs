@@ -45,6 +45,7 @@ pub mod projection; // LDI per source, visibility ratio, refinement
 pub mod transfer; // direct transfer to elements
 
 // L6 results
+pub mod radiosity; // hierarchical Monte Carlo radiosity: interreflection after the direct shoot
 pub mod sensors; // sensor illuminance from every source, with error estimate
 
 // L8 orchestration

@@ -6,3 +6,4 @@ mod cli; // the binary end to end: exit codes, messages naming file:line, output
 mod extremes; // low sun, polar day and night, turbidity limits, slivers, far coordinates
 mod layers; // the layer rule of lib.rs: lower layers never import higher ones
 mod physics; // closed-form daylight: unobstructed skies, roof opening, sun footprint, glazing
+mod radiosity; // HMC interreflection: furnace, configuration factor, Sumpner room, energy, threads
