@@ -38,6 +38,7 @@ pub enum SkyArg {
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Illuminance at every sensor for one instant (direct sun + sky + ground glow).
+    #[command(allow_negative_numbers = true)]
     Instant {
         /// The scene file (scene.toml).
         scene: PathBuf,
@@ -71,9 +72,9 @@ pub enum Command {
         /// Cache folder (reserved: projection caching is not implemented yet).
         #[arg(long)]
         cache: Option<PathBuf>,
-        /// Random seed (reserved: the direct pipeline is deterministic without one).
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
+        /// Seed of the Monte Carlo interreflection (results are a pure function of it).
+        #[arg(long)]
+        seed: Option<u64>,
     },
 }
 

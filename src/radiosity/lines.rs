@@ -168,7 +168,8 @@ pub struct SensorIndirect {
 
 /// Indirect irradiance (RGB W/m²) at `point` facing unit `normal`, from the solved
 /// radiosity: E = ∫ L cos θ dω with L = B/π for diffuse surfaces; with cosine-distributed
-/// rays (pdf cos θ/π) the estimator is E = mean(B_hit·τ) over `rays` rays. Rays pass
+/// rays (pdf cos θ/π) the estimator is E = mean(B_hit·τ) over about `rays` rays, cast as
+/// [`GATHER_BATCHES`] independent jittered-stratified batches. Rays pass
 /// glazing with τ(θ); rays meeting a back face or leaving the scene contribute nothing (sky
 /// and sun are the direct gather's). The random numbers are a pure function of `seed`.
 ///
@@ -185,49 +186,57 @@ pub fn gather_sensor(
 ) -> SensorIndirect {
     let n = normal.normalize();
     let stream = mix64(seed ^ 0x5e45_0a11);
-    let mut sum = Rgb::ZERO;
-    let mut sum2 = Rgb::ZERO;
+    // GATHER_BATCHES independent jittered-stratified patterns of m × m rays each: the
+    // strata cut the noise, and the spread of the independent batch means is an honest
+    // standard error (the sample variance of stratified rays would overstate it).
+    let m = ((rays / GATHER_BATCHES).max(1) as f64)
+        .sqrt()
+        .floor()
+        .max(1.0) as u64;
+    let mut batch_means = Vec::with_capacity(GATHER_BATCHES as usize);
     let mut weights: BTreeMap<u32, f64> = BTreeMap::new();
-    for k in 0..rays as u64 {
-        let (d, _) = cosine_direction(
-            n,
-            uniform(seed, stream, 2 * k),
-            uniform(seed, stream, 2 * k + 1),
-        );
-        let out = tracer.trace(point, d, Rgb::ONE);
-        let v = match out.end {
-            End::Front { tri, point: y, .. } => {
-                let root = state.hierarchy.elements[tri as usize].vertices;
-                let leaf = state.leaf_at(tri, barycentric(root, y));
-                *weights.entry(leaf).or_default() += crate::photometry::grey(out.power);
-                state.radiosity(leaf) * out.power
+    let mut k = 0u64;
+    for _ in 0..GATHER_BATCHES {
+        let mut sum = Rgb::ZERO;
+        for i in 0..m {
+            for j in 0..m {
+                let u1 = (i as f64 + uniform(seed, stream, 2 * k)) / m as f64;
+                let u2 = (j as f64 + uniform(seed, stream, 2 * k + 1)) / m as f64;
+                k += 1;
+                let (d, _) = cosine_direction(n, u1, u2);
+                let out = tracer.trace(point, d, Rgb::ONE);
+                if let End::Front { tri, point: y, .. } = out.end {
+                    let root = state.hierarchy.elements[tri as usize].vertices;
+                    let leaf = state.leaf_at(tri, barycentric(root, y));
+                    *weights.entry(leaf).or_default() += crate::photometry::grey(out.power);
+                    sum += state.radiosity(leaf) * out.power;
+                }
             }
-            _ => Rgb::ZERO,
-        };
-        sum += v;
-        sum2 += v * v;
+        }
+        batch_means.push(sum / (m * m) as f64);
     }
-    if rays == 0 {
-        return SensorIndirect::default();
-    }
-    let m = rays as f64;
-    let mean = sum / m;
-    let sample_var = if rays > 1 {
-        ((sum2 - mean * sum) / (m - 1.0) / m).max(Rgb::ZERO)
-    } else {
-        Rgb::splat(f64::INFINITY)
-    };
+    let total = k as f64;
+    let b = GATHER_BATCHES as f64;
+    let mean = batch_means.iter().fold(Rgb::ZERO, |a, x| a + *x) / b;
+    let spread = batch_means
+        .iter()
+        .fold(Rgb::ZERO, |a, x| a + (*x - mean) * (*x - mean))
+        / (b - 1.0)
+        / b;
     let mut elem_var = Rgb::ZERO;
     for (&leaf, &w) in &weights {
         let s = state.radiosity_std_err(leaf);
-        elem_var += s * s * (w / m).powi(2);
+        elem_var += s * s * (w / total).powi(2);
     }
     SensorIndirect {
         irradiance: mean,
-        std_err: super::sqrt3(sample_var + elem_var),
-        rays,
+        std_err: super::sqrt3(spread + elem_var),
+        rays: k as u32,
     }
 }
+
+/// Independent stratified batches of the sensor gather (see [`gather_sensor`]).
+pub const GATHER_BATCHES: u32 = 8;
 
 /// Largest reflectance of the scene's opaque materials, clamped below 1 (for bounds).
 pub(crate) fn rho_max(state: &RadiosityState) -> f64 {

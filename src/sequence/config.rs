@@ -2,6 +2,7 @@
 //! trading error against time.
 
 use crate::projection::ProjectionParams;
+use crate::radiosity::RadiosityParams;
 use crate::sensors::SensorParams;
 use crate::sources::SkyParams;
 use serde::{Deserialize, Serialize};
@@ -53,8 +54,12 @@ pub struct Quality {
     pub sun_spacing_deg: f64,
     /// LDI and refinement.
     pub projection: ProjectionParams,
-    /// Sensor gather.
+    /// Sensor gather (direct).
     pub sensors: SensorParams,
+    /// Interreflection solver.
+    pub radiosity: RadiosityParams,
+    /// Cosine-distributed rays per sensor for the indirect gather.
+    pub gather_rays: u32,
 }
 
 impl Quality {
@@ -66,6 +71,14 @@ impl Quality {
             sun_spacing_deg: 0.25,
             projection: ProjectionParams::default(),
             sensors: SensorParams::default(),
+            // The solver's default target is global (area-weighted over every leaf, outdoor
+            // ground included); interiors need a tighter one (README: presets).
+            radiosity: RadiosityParams {
+                target_rel_error: 0.005,
+                lines_per_step: 80_000,
+                ..RadiosityParams::default()
+            },
+            gather_rays: 4096,
         };
         let q = match name {
             "default" => base,
@@ -87,6 +100,12 @@ impl Quality {
                     visibility_tolerance: 0.02,
                     sample_angle_deg: 8.0,
                 },
+                radiosity: RadiosityParams {
+                    target_rel_error: 0.02,
+                    lines_per_step: 20_000,
+                    ..base.radiosity
+                },
+                gather_rays: 1024,
             },
             "high" => Quality {
                 name: "high",
@@ -109,6 +128,12 @@ impl Quality {
                     visibility_tolerance: 0.002,
                     sample_angle_deg: 2.0,
                 },
+                radiosity: RadiosityParams {
+                    target_rel_error: 0.003,
+                    lines_per_step: 160_000,
+                    ..base.radiosity
+                },
+                gather_rays: 16384,
             },
             "reference" => Quality {
                 name: "reference",
@@ -131,6 +156,12 @@ impl Quality {
                     visibility_tolerance: 0.0005,
                     sample_angle_deg: 1.0,
                 },
+                radiosity: RadiosityParams {
+                    target_rel_error: 0.002,
+                    lines_per_step: 320_000,
+                    ..base.radiosity
+                },
+                gather_rays: 65536,
             },
             _ => return None,
         };

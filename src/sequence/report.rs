@@ -105,6 +105,9 @@ pub struct Report {
     pub warnings: Vec<String>,
     /// How `lux_err` is estimated.
     pub error_model: String,
+    /// The interreflection solve: lines, batches, stop reason, estimated error, energy
+    /// balance; absent when the scene needed none.
+    pub radiosity: Option<crate::radiosity::SolveReport>,
     /// Largest `lux_err` over sensors, lux.
     pub max_lux_err: f64,
     /// Largest `lux_err / lux` over sensors with lux > 1.
