@@ -7,3 +7,4 @@ mod extremes; // low sun, polar day and night, turbidity limits, slivers, far co
 mod layers; // the layer rule of lib.rs: lower layers never import higher ones
 mod physics; // closed-form daylight: unobstructed skies, roof opening, sun footprint, glazing
 mod radiosity; // HMC interreflection: furnace, configuration factor, Sumpner room, energy, threads
+mod warm_day; // 96 warm-started 15-minute steps of a clear day against cold solves

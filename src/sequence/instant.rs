@@ -114,6 +114,47 @@ fn coarse_radiosity(p: &crate::radiosity::RadiosityParams) -> crate::radiosity::
     }
 }
 
+/// One LDI projection and VR refinement per source, in parallel; records in source order.
+pub fn project_sources(
+    scene: &Scene,
+    sources: &[Source],
+    quality: &Quality,
+) -> Vec<DirectionRecord> {
+    if scene.triangles.is_empty() {
+        return vec![DirectionRecord::default(); sources.len()];
+    }
+    let pscene = ProjectionScene::new(scene);
+    let e_max = sources
+        .iter()
+        .map(|s| grey(s.normal_irradiance))
+        .fold(0.0, f64::max);
+    sources
+        .par_iter()
+        .map(|s| {
+            let res = quality
+                .projection
+                .resolution_for(grey(s.normal_irradiance), e_max);
+            projection::project(&pscene, s.direction, res, &quality.projection)
+        })
+        .collect()
+}
+
+/// The sun and sky shoot alone (paper §4–5): sources, projections and direct transfer.
+/// Returns the sources, the refined hierarchy and each element's direct irradiance — what
+/// a time-step loop feeds to [`crate::radiosity::warm_start`].
+pub fn direct_light(
+    scene: &Scene,
+    sky: &Sky,
+    quality: &Quality,
+) -> (Vec<Source>, Hierarchy, DirectIrradiance) {
+    let (sources, _, _) = sources_for(sky, quality);
+    let records = project_sources(scene, &sources, quality);
+    let mut hierarchy = Hierarchy::new(scene);
+    let refs: Vec<&DirectionRecord> = records.iter().collect();
+    let direct = transfer::transfer(&mut hierarchy, &sources, &refs);
+    (sources, hierarchy, direct)
+}
+
 /// Runs one instant on `scene` for the sky `sky` (already built for the instant).
 pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report) -> InstantResult {
     let mut times = std::mem::take(&mut report.stage_seconds);
@@ -154,26 +195,7 @@ pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report)
         report.sun.max_shadow_shift_m = diagonal * e.to_radians();
     }
 
-    // Projections: one LDI per source, in parallel; records kept in source order.
-    let pscene = ProjectionScene::new(scene);
-    let e_max = sources
-        .iter()
-        .map(|s| grey(s.normal_irradiance))
-        .fold(0.0, f64::max);
-    let records: Vec<DirectionRecord> = times.time("projection", || {
-        if scene.triangles.is_empty() {
-            return vec![DirectionRecord::default(); sources.len()];
-        }
-        sources
-            .par_iter()
-            .map(|s| {
-                let res = quality
-                    .projection
-                    .resolution_for(grey(s.normal_irradiance), e_max);
-                projection::project(&pscene, s.direction, res, &quality.projection)
-            })
-            .collect()
-    });
+    let records = times.time("projection", || project_sources(scene, &sources, quality));
     if scene.triangles.is_empty() {
         report
             .skipped
