@@ -223,42 +223,26 @@ fn sky_component_under_roof_opening() {
     // Uniform sky: SC = F = 4·F(0.5, 0.5, 3) = 0.0341068.
     let f = 4.0 * f_parallel(0.5, 0.5, 3.0);
     assert_close("closed-form F", f, 0.0341068, 1e-6);
-    let l = 10.0;
-    let r = run(&scene, &sky_of(Some(Box::new(Uniform(l))), None, 0.0), &q);
-    let expected = lux_of(PI * l * f);
-    let got = r.sensors[0];
-    assert_close(
+    let check = |what: &str, sky: Box<dyn daystep::sky::SkyDistribution>, expected: f64| {
+        let got = run(&scene, &sky_of(Some(sky), None, 0.0), &q).sensors[0];
+        assert_close(what, got.lux, expected, 0.02 * expected);
+        let err = (got.lux - expected).abs();
+        assert!(
+            got.lux_err >= err,
+            "{what}: lux_err {} vs error {err}",
+            got.lux_err
+        );
+    };
+    check(
         "uniform sky through 1x1 m opening",
-        got.lux,
-        expected,
-        0.02 * expected,
-    );
-    assert!(
-        got.lux_err >= (got.lux - expected).abs(),
-        "lux_err {} vs error {}",
-        got.lux_err,
-        (got.lux - expected).abs()
+        Box::new(Uniform(10.0)),
+        lux_of(PI * 10.0 * f),
     );
     // Moon–Spencer overcast: E/L_z = 0.1065100 (validation_cases.md §2.5).
-    let lz = 10.0;
-    let r = run(
-        &scene,
-        &sky_of(Some(Box::new(MoonSpencer(lz))), None, 0.0),
-        &q,
-    );
-    let expected = lux_of(0.1065100 * lz);
-    let got = r.sensors[0];
-    assert_close(
+    check(
         "overcast through 1x1 m opening",
-        got.lux,
-        expected,
-        0.02 * expected,
-    );
-    assert!(
-        got.lux_err >= (got.lux - expected).abs(),
-        "lux_err {} vs error {}",
-        got.lux_err,
-        (got.lux - expected).abs()
+        Box::new(MoonSpencer(10.0)),
+        lux_of(0.1065100 * 10.0),
     );
 }
 
