@@ -85,3 +85,16 @@ impl Error {
         }
     }
 }
+
+/// Test helper: the display text, path, line and value of an [`Error::Input`]; panics on
+/// any other variant.
+#[cfg(test)]
+pub(crate) fn input_parts(e: Error) -> (String, PathBuf, Option<usize>, Option<String>) {
+    let shown = e.to_string();
+    match e {
+        Error::Input {
+            path, line, value, ..
+        } => (shown, path, line, value),
+        other => panic!("expected an input error, got {other:?}"),
+    }
+}

@@ -589,13 +589,7 @@ Kd 0.9
     }
 
     fn input_error(e: Error) -> (String, PathBuf, Option<usize>, Option<String>) {
-        let shown = e.to_string();
-        match e {
-            Error::Input {
-                path, line, value, ..
-            } => (shown, path, line, value),
-            other => panic!("expected an input error, got {other:?}"),
-        }
+        crate::error::input_parts(e)
     }
 
     const BOX: &str = "\

@@ -89,11 +89,8 @@ mod tests {
     }
 
     fn input_error(e: Error) -> (String, Option<usize>, Option<String>) {
-        let shown = e.to_string();
-        match e {
-            Error::Input { line, value, .. } => (shown, line, value),
-            other => panic!("expected an input error, got {other:?}"),
-        }
+        let (shown, _, line, value) = crate::error::input_parts(e);
+        (shown, line, value)
     }
 
     #[test]
