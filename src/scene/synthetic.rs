@@ -491,14 +491,22 @@ pub const OFFICE_WALL: f64 = 0.2;
 /// The plane of the sample office's glazing (mid-wall), y in m.
 pub const OFFICE_GLAZING_Y: f64 = -0.5 * OFFICE_WALL;
 
+/// The materials both generated offices share, in this order: floor 0.2, wall 0.5,
+/// ceiling 0.8, exterior 0.35, ground 0.2 (diffuse reflectance).
+fn add_office_palette(b: &mut SceneBuilder) -> [u32; 5] {
+    [
+        b.add_opaque("floor", 0.2),
+        b.add_opaque("wall", 0.5),
+        b.add_opaque("ceiling", 0.8),
+        b.add_opaque("exterior", 0.35),
+        b.add_opaque("ground", 0.2),
+    ]
+}
+
 /// The bundled sample scene as a builder (see [`side_lit_office`]).
 pub fn side_lit_office_builder() -> SceneBuilder {
     let mut b = SceneBuilder::new();
-    let floor = b.add_opaque("floor", 0.2);
-    let wall = b.add_opaque("wall", 0.5);
-    let ceiling = b.add_opaque("ceiling", 0.8);
-    let exterior = b.add_opaque("exterior", 0.35);
-    let ground = b.add_opaque("ground", 0.2);
+    let [floor, wall, ceiling, exterior, ground] = add_office_palette(&mut b);
     let obstruction = b.add_opaque("obstruction", 0.3);
     let glass = b.add_glazing("glass", 0.88);
 
@@ -607,11 +615,7 @@ fn building_base_triangles(floors: usize, nx: usize, ny: usize) -> usize {
 
 /// Adds the building; returns nothing. `desks[i]` desks on floor i.
 fn add_building(b: &mut SceneBuilder, floors: usize, nx: usize, ny: usize, desks: &[usize]) {
-    let floor = b.add_opaque("floor", 0.2);
-    let wall = b.add_opaque("wall", 0.5);
-    let ceiling = b.add_opaque("ceiling", 0.8);
-    let exterior = b.add_opaque("exterior", 0.35);
-    let ground = b.add_opaque("ground", 0.2);
+    let [floor, wall, ceiling, exterior, ground] = add_office_palette(b);
     let partition = b.add_opaque("partition", 0.6);
     let furniture = b.add_opaque("furniture", 0.4);
     let glass = b.add_glazing("glass", 0.88);
