@@ -130,7 +130,7 @@ pub fn run(cli: Cli) -> Result<()> {
             out,
             quality,
             cache,
-            seed: _,
+            seed,
         } => {
             let q = Quality::preset(&quality).ok_or_else(|| {
                 Error::arg(
@@ -139,6 +139,10 @@ pub fn run(cli: Cli) -> Result<()> {
                     "expected draft, default, high or reference",
                 )
             })?;
+            let q = match seed {
+                Some(s) => q.with_seed(s),
+                None => q,
+            };
             let spec = sky_spec(sky, dni, dhi, sky_type, turbidity, dew_point)?;
             let scene = Scene::load(&scene)?;
             for w in &scene.warnings {

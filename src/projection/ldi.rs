@@ -64,14 +64,63 @@ impl Ldi {
     /// Scan-converts every triangle (both faces occlude) along `dir` at a resolution of
     /// `resolution` pixels along the image's longer side.
     pub fn build(scene: &ProjectionScene, dir: DVec3, resolution: u32) -> Ldi {
+        Ldi::build_sized(scene, dir, None, DVec2::ZERO, |ext| {
+            ext.max_element() / resolution.max(1) as f64
+        })
+    }
+
+    /// As [`Ldi::build`] with a fixed pixel edge of `pixel_m` metres whatever the
+    /// direction: every bundle then has the same line density (lines per m² across the
+    /// bundle), which global-line estimates need.
+    pub fn build_with_pixel(scene: &ProjectionScene, dir: DVec3, pixel_m: f64) -> Ldi {
+        Ldi::build_sized(scene, dir, None, DVec2::ZERO, |_| pixel_m)
+    }
+
+    /// As [`Ldi::build_with_pixel`], the image covering only the projection of the box
+    /// `window` (scene frame, m): lines that miss the box are not drawn, fragments along
+    /// the drawn ones are complete. The pixel grid is shifted by `jitter` (fractions of a
+    /// pixel, each in [0, 1)) so that random bundles do not alias with the geometry.
+    pub fn build_window(
+        scene: &ProjectionScene,
+        dir: DVec3,
+        pixel_m: f64,
+        window: (DVec3, DVec3),
+        jitter: DVec2,
+    ) -> Ldi {
+        Ldi::build_sized(scene, dir, Some(window), jitter, |_| pixel_m)
+    }
+
+    fn build_sized(
+        scene: &ProjectionScene,
+        dir: DVec3,
+        window: Option<(DVec3, DVec3)>,
+        jitter: DVec2,
+        pixel_of: impl Fn(DVec2) -> f64,
+    ) -> Ldi {
         let (u, v) = frame::basis(dir);
         let mut lo = DVec2::splat(f64::INFINITY);
         let mut hi = DVec2::splat(f64::NEG_INFINITY);
-        for t in &scene.vertices {
-            for p in t {
-                let q = DVec2::new(u.dot(*p), v.dot(*p));
-                lo = lo.min(q);
-                hi = hi.max(q);
+        let mut add = |p: DVec3| {
+            let q = DVec2::new(u.dot(p), v.dot(p));
+            lo = lo.min(q);
+            hi = hi.max(q);
+        };
+        match window {
+            Some((a, b)) => {
+                for k in 0..8 {
+                    add(DVec3::new(
+                        if k & 1 == 0 { a.x } else { b.x },
+                        if k & 2 == 0 { a.y } else { b.y },
+                        if k & 4 == 0 { a.z } else { b.z },
+                    ));
+                }
+            }
+            None => {
+                for t in &scene.vertices {
+                    for p in t {
+                        add(*p);
+                    }
+                }
             }
         }
         if !lo.is_finite() {
@@ -79,12 +128,11 @@ impl Ldi {
             hi = DVec2::ONE;
         }
         let ext = (hi - lo).max(DVec2::splat(1e-9));
-        let resolution = resolution.max(1);
-        let pixel = ext.max_element() / resolution as f64;
+        let pixel = pixel_of(ext);
         // Half a pixel of margin so vertices on the bounds sample like interior ones.
-        let origin = lo - DVec2::splat(0.5 * pixel);
-        let width = ((ext.x / pixel).ceil() as u32 + 1).max(1);
-        let height = ((ext.y / pixel).ceil() as u32 + 1).max(1);
+        let origin = lo - (DVec2::splat(0.5) + jitter) * pixel;
+        let width = ((ext.x / pixel).ceil() as u32 + 2).max(1);
+        let height = ((ext.y / pixel).ceil() as u32 + 2).max(1);
         let camera = Camera {
             dir,
             u,

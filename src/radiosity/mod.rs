@@ -36,11 +36,15 @@
 pub mod convergence;
 pub mod hmc;
 pub mod lines;
+pub mod transport;
 pub mod warm_start;
 
 pub use convergence::{EnergyBalance, SolveReport, StopReason};
 pub use hmc::solve;
 pub use lines::{gather_sensor, SensorIndirect, Tracer};
+pub use transport::{
+    Transport, TransportParams, TransportReport, TransportSensor, TransportState, TransportStats,
+};
 pub use warm_start::warm_start;
 
 use crate::hierarchy::Hierarchy;

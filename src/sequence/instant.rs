@@ -1,13 +1,13 @@
 //! One instant: sky → sources → projections (LDI, VR refinement) → direct transfer →
 //! sensors, with a discretisation-error estimate from one coarser level.
 
-use super::config::{Quality, SkySpec};
+use super::config::{Quality, SkySpec, Solver};
 use super::report::{Counts, Report, StageTimes, SunReport};
 use crate::error::{Error, Result};
 use crate::hierarchy::Hierarchy;
 use crate::photometry::{grey, lux};
 use crate::projection::{self, DirectionRecord, ProjectionScene};
-use crate::radiosity::{self, RadiosityState, Tracer};
+use crate::radiosity::{self, RadiosityState, Tracer, Transport, TransportState};
 use crate::scene::Scene;
 use crate::sensors::{all_sensors_direct, SensorDirect, Visibility};
 use crate::site::solar_position::{solar_position, SolarPosition};
@@ -46,8 +46,10 @@ pub struct InstantResult {
     pub hierarchy: Hierarchy,
     /// Direct irradiance per element.
     pub direct: DirectIrradiance,
-    /// The interreflection solution, when the scene needed one.
+    /// The local-line interreflection solution, when that solver ran.
     pub radiosity: Option<RadiosityState>,
+    /// The global-line operator and its solution, when that solver ran.
+    pub transport: Option<(Transport, TransportState)>,
     /// The sources used.
     pub sources: Vec<Source>,
     /// The report.
@@ -232,7 +234,24 @@ pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report)
         m.reflectance().max_element() > 0.0 || m.is_emitter()
     });
     let mut solution = None;
-    if needs_radiosity {
+    let mut global = None;
+    if needs_radiosity && quality.solver == Solver::GlobalLines {
+        let t = times.time("transport_build", || {
+            Transport::build(scene, &scene.sensors, &quality.transport)
+        });
+        let total: Vec<crate::photometry::Rgb> = direct
+            .sun
+            .iter()
+            .zip(&direct.sky)
+            .map(|(a, b)| *a + *b)
+            .collect();
+        let (st, rep) = times.time("transport_solve", || {
+            t.solve(&t.mesh.average_onto(&hierarchy, &total), None)
+        });
+        report.transport = Some(t.stats);
+        report.transport_solve = Some(rep);
+        global = Some((t, st));
+    } else if needs_radiosity {
         let tracer = times.time("radiosity_setup", || Tracer::new(scene));
         let mut state = RadiosityState::from_direct(scene, hierarchy.clone(), &direct);
         let solve = times.time("radiosity", || {
@@ -296,7 +315,32 @@ pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report)
                     gather(coarse, (quality.gather_rays / 4).max(64), 0xc0a5e),
                 )
             }),
-            None => (none(), none()),
+            None => match &global {
+                Some((t, st)) => times.time("indirect_gather", || {
+                    // Mean over the independent operators, and the sensor's error as the
+                    // coarse solve's stand-in: |fine − coarse| + 1σ noise, so the sum
+                    // below reads the same for both solvers.
+                    let out = t.sensors(st);
+                    let fine = out
+                        .iter()
+                        .map(|o| radiosity::SensorIndirect {
+                            irradiance: o.irradiance,
+                            std_err: o.std_err,
+                            rays: 0,
+                        })
+                        .collect();
+                    let coarse = out
+                        .iter()
+                        .map(|o| radiosity::SensorIndirect {
+                            irradiance: o.irradiance + o.discretisation,
+                            std_err: crate::photometry::Rgb::ZERO,
+                            rays: 0,
+                        })
+                        .collect();
+                    (fine, coarse)
+                }),
+                None => (none(), none()),
+            },
         };
         for (k, (f, c)) in fine.iter().zip(&coarse).enumerate() {
             counts.sensor_rays += f.rays + c.rays;
@@ -325,9 +369,10 @@ pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report)
         thresholds, sun grid spacing x2, visibility depth -1) + |difference between per-child and \
         per-node sky radiance| + sum of the visibility \
         range of partly visible nodes at the deepest split + 2e-4 x lux (sky normalisation \
-        quadrature) + the indirect gather's 1-sigma Monte Carlo noise (ray sampling and the \
-        radiosity solution's spread over independent batches) + |indirect - indirect of an \
-        independent solve with a quarter of the lines per step|"
+        quadrature) + the indirect part's 1-sigma noise (global lines: standard error of the mean \
+        over independent line sets and sensor rays; local lines: gather and batch spread) + its \
+        discretisation (global lines: |indirect - indirect on the mesh one level coarser|; local \
+        lines: |indirect - indirect of an independent solve with a quarter of the lines per step|)"
         .into();
     report.max_lux_err = values.iter().map(|v| v.lux_err).fold(0.0, f64::max);
     report.max_relative_err = values
@@ -343,6 +388,7 @@ pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report)
         hierarchy,
         direct,
         radiosity: solution.map(|(s, _, _)| s),
+        transport: global,
         sources,
         report: std::mem::take(report),
     }

@@ -108,6 +108,10 @@ pub struct Report {
     /// The interreflection solve: lines, batches, stop reason, estimated error, energy
     /// balance; absent when the scene needed none.
     pub radiosity: Option<crate::radiosity::SolveReport>,
+    /// The global-line operator's build counters, when that solver ran.
+    pub transport: Option<crate::radiosity::TransportStats>,
+    /// The global-line solve (sweeps, iteration error), when that solver ran.
+    pub transport_solve: Option<crate::radiosity::TransportReport>,
     /// Largest `lux_err` over sensors, lux.
     pub max_lux_err: f64,
     /// Largest `lux_err / lux` over sensors with lux > 1.

@@ -1,0 +1,236 @@
+//! Global-line transport (radiosity::transport) against closed forms: furnace at ρ = 0.5,
+//! 0.9 and 0.99, the configuration factor of an emitting square, a uniform closed room,
+//! warm start = cold solve, thread independence.
+
+use crate::util::*;
+use daystep::photometry::Rgb;
+use daystep::radiosity::{Transport, TransportParams};
+use daystep::scene::Scene;
+use glam::DVec3;
+use std::f64::consts::PI;
+
+/// Closed cube [0,s]³ with inward faces of reflectance `rho` emitting `ke`, one sensor
+/// near the centre, tilted.
+fn furnace(s: f64, rho: f64, ke: f64) -> Scene {
+    let mut b = Builder::new();
+    let m = b.material("wall", rho, 0.0);
+    b.input.materials[m as usize].ke = Rgb::splat(ke);
+    b.hrect(0.0, s, 0.0, s, 0.0, true, m);
+    b.hrect(0.0, s, 0.0, s, s, false, m);
+    b.walls_inward(0.0, s, 0.0, s, 0.0, s, m);
+    b.sensor(
+        DVec3::new(0.5 * s + 0.1, 0.5 * s - 0.2, 0.5 * s + 0.05),
+        DVec3::new(0.3, 0.2, 0.9),
+    );
+    b.build()
+}
+
+fn small() -> TransportParams {
+    TransportParams {
+        directions: 256,
+        resolution: 128,
+        gather_rays: 4096,
+        ..TransportParams::default()
+    }
+}
+
+#[test]
+fn furnace_is_exact_at_any_reflectance() {
+    // In a closed box every line from a front face ends on another front face, so every
+    // row of F̂ sums to one and the solution is M/(1 − ρ) up to the iteration error,
+    // whatever the line noise.
+    for (rho, tol) in [(0.5, 0.005), (0.9, 0.005), (0.99, 0.02)] {
+        let scene = furnace(2.0, rho, 1.0);
+        let t = Transport::build(&scene, &scene.sensors, &small());
+        let zero = vec![Rgb::ZERO; t.rows()];
+        let (st, rep) = t.solve(&zero, None);
+        let exact = PI / (1.0 - rho);
+        let e = t.sensors(&st)[0];
+        let err = (e.irradiance.x - exact).abs() / exact;
+        eprintln!(
+            "transport furnace ρ {rho}: E {:.5} exact {exact:.5} rel {err:.2e} sweeps {} iter err {:.1e} rows {}",
+            e.irradiance.x, rep.sweeps, rep.iteration_error, t.rows()
+        );
+        assert!(err < tol, "ρ {rho}: {err}");
+        // The stop rule's bound holds.
+        assert!(rep.iteration_error <= t.params.tolerance);
+        assert!(err <= 10.0 * t.params.tolerance + 1e-6, "ρ {rho}: {err}");
+    }
+}
+
+#[test]
+fn configuration_factor_of_an_emitting_square() {
+    // Unit square at height 1 facing down, one corner above the sensor: E = π M F.
+    let m = 2.0;
+    let mut b = Builder::new();
+    let lamp = b.material("lamp", 0.0, 0.0);
+    b.input.materials[lamp as usize].ke = Rgb::splat(m);
+    b.hrect(0.0, 1.0, 0.0, 1.0, 1.0, false, lamp);
+    b.sensor(DVec3::ZERO, DVec3::Z);
+    let scene = b.build();
+    let p = TransportParams {
+        gather_rays: 65_536,
+        ..small()
+    };
+    let t = Transport::build(&scene, &scene.sensors, &p);
+    let (st, _) = t.solve(&vec![Rgb::ZERO; t.rows()], None);
+    let exact = PI * m * f_parallel(1.0, 1.0, 1.0);
+    let e = t.sensors(&st)[0];
+    let err = (e.irradiance.x - exact).abs();
+    eprintln!(
+        "transport configuration factor: E {:.5} ± {:.5} exact {exact:.5} rel {:.4}",
+        e.irradiance.x,
+        e.std_err.x,
+        err / exact
+    );
+    assert!(err <= 0.01 * exact, "{err}");
+    assert!(
+        err <= 4.0 * e.std_err.x + 1e-3 * exact,
+        "{err} vs σ {}",
+        e.std_err.x
+    );
+}
+
+/// Closed 4 × 4 × 4 m room of uniform reflectance.
+fn room(rho: f64) -> Scene {
+    let mut b = Builder::new();
+    let m = b.material("all", rho, 0.0);
+    b.hrect(0.0, 4.0, 0.0, 4.0, 0.0, true, m);
+    b.hrect(0.0, 4.0, 0.0, 4.0, 4.0, false, m);
+    b.walls_inward(0.0, 4.0, 0.0, 4.0, 0.0, 4.0, m);
+    b.sensor(DVec3::new(2.3, 1.8, 0.5), DVec3::Z);
+    b.build()
+}
+
+/// Direct irradiance `e` on the floor rows (normal +z), zero elsewhere.
+fn floor_light(t: &Transport, e: f64) -> Vec<Rgb> {
+    t.mesh
+        .elements
+        .iter()
+        .map(|&i| {
+            let v = t.mesh.hierarchy.elements[i as usize].vertices;
+            let n = (v[1] - v[0]).cross(v[2] - v[0]);
+            if n.z > 0.0 && v[0].z < -1.9 {
+                Rgb::splat(e)
+            } else {
+                Rgb::ZERO
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn uniform_closed_room_conserves_energy_and_warm_start_equals_cold() {
+    // Uniform ρ, closed: mean indirect irradiance = ρΦ/(S_T(1 − ρ)) exactly.
+    let rho = 0.6;
+    let scene = room(rho);
+    let t = Transport::build(&scene, &scene.sensors, &small());
+    let total_area: f64 = t.mesh.area.iter().sum();
+    assert!((total_area - 96.0).abs() < 1e-9);
+    let mean_e = |st: &daystep::radiosity::TransportState| {
+        (0..t.rows())
+            .map(|r| t.indirect_irradiance(st, r).x * t.mesh.area[r])
+            .sum::<f64>()
+            / total_area
+    };
+    let exact = |ed: f64| rho * ed * 16.0 / (96.0 * (1.0 - rho));
+    let (s1, r1) = t.solve(&floor_light(&t, 100.0), None);
+    let m1 = mean_e(&s1);
+    eprintln!(
+        "transport room: mean E_ir {m1:.4} exact {:.4} sweeps {}",
+        exact(100.0),
+        r1.sweeps
+    );
+    // Rows sum to one exactly; reciprocity holds only statistically: 1 %.
+    assert!((m1 - exact(100.0)).abs() <= 0.01 * exact(100.0));
+    // Warm start from 100 to 120 W/m² equals the cold solve of 120 within the iteration
+    // tolerance, in fewer sweeps.
+    let (warm, rw) = t.solve(&floor_light(&t, 120.0), Some(&s1));
+    let (cold, rc) = t.solve(&floor_light(&t, 120.0), None);
+    assert!(rw.warm && !rc.warm);
+    let (a, b) = (t.sensors(&warm)[0], t.sensors(&cold)[0]);
+    let d = (a.irradiance.x - b.irradiance.x).abs() / b.irradiance.x;
+    eprintln!(
+        "  warm {} sweeps, cold {} sweeps, sensor rel diff {d:.2e}",
+        rw.sweeps, rc.sweeps
+    );
+    assert!(d <= 4.0 * t.params.tolerance, "{d}");
+    assert!(rw.sweeps < rc.sweeps);
+}
+
+#[test]
+fn bit_identical_for_one_and_two_threads() {
+    let scene = room(0.5);
+    let run = |threads| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let t = Transport::build(&scene, &scene.sensors, &small());
+            let (st, _) = t.solve(&floor_light(&t, 100.0), None);
+            t.sensors(&st)
+                .iter()
+                .map(|s| s.irradiance.x.to_bits())
+                .collect::<Vec<_>>()
+        })
+    };
+    assert_eq!(run(1), run(2));
+}
+
+/// Form factor between aligned parallel rectangles a × b at distance c (area to area).
+fn f_plates(a: f64, b: f64, c: f64) -> f64 {
+    let (x, y) = (a / c, b / c);
+    let (x2, y2) = (x * x, y * y);
+    2.0 / (PI * x * y)
+        * ((((1.0 + x2) * (1.0 + y2)) / (1.0 + x2 + y2)).sqrt().ln()
+            + x * (1.0 + y2).sqrt() * (x / (1.0 + y2).sqrt()).atan()
+            + y * (1.0 + x2).sqrt() * (y / (1.0 + x2).sqrt()).atan()
+            - x * x.atan()
+            - y * y.atan())
+}
+
+#[test]
+fn parallel_plates_beside_a_far_ground() {
+    // An emitting unit square 1 m above a receiving one, over a 100 × 100 m ground: only
+    // the region around the sensor is meshed and lined, the rest keeps B = S. The mean
+    // irradiance of the receiver is π M F₁₂.
+    assert!((f_plates(1.0, 1.0, 1.0) - 0.19982).abs() < 1e-5);
+    let mut b = Builder::new();
+    let lamp = b.material("lamp", 0.0, 0.0);
+    b.input.materials[lamp as usize].ke = Rgb::splat(1.0);
+    let grey = b.material("grey", 0.5, 0.0);
+    b.hrect(0.0, 1.0, 0.0, 1.0, 1.0, false, lamp); // triangles 0, 1
+    b.hrect(0.0, 1.0, 0.0, 1.0, 0.0, true, grey); // 2, 3
+    b.hrect(-50.0, 50.0, -50.0, 50.0, -1.0, true, grey);
+    b.sensor(DVec3::new(0.5, 0.5, 0.5), DVec3::Z);
+    let scene = b.build();
+    let p = TransportParams {
+        element_area_m2: 0.05,
+        directions: 1024,
+        resolution: 256,
+        ..small()
+    };
+    let t = Transport::build(&scene, &scene.sensors, &p);
+    assert!(
+        t.rows() < 20_000,
+        "the far ground stays coarse: {} rows",
+        t.rows()
+    );
+    let (st, _) = t.solve(&vec![Rgb::ZERO; t.rows()], None);
+    let (mut s, mut a) = (0.0, 0.0);
+    for r in 0..t.rows() {
+        let tri = t.mesh.hierarchy.elements[t.mesh.elements[r] as usize]
+            .key
+            .tri;
+        if tri == 2 || tri == 3 {
+            s += t.indirect_irradiance(&st, r).x * t.mesh.area[r];
+            a += t.mesh.area[r];
+        }
+    }
+    let exact = PI * f_plates(1.0, 1.0, 1.0);
+    eprintln!("plates: mean E {:.5} exact {exact:.5}", s / a);
+    assert!((a - 1.0).abs() < 1e-9);
+    // About 50 000 lines cross the receiver: binomial noise of F ≈ 0.4 %; 2 % is 5σ.
+    assert!((s / a - exact).abs() < 0.02 * exact, "{}", s / a);
+}
