@@ -23,7 +23,7 @@
 //! L0 error, files, math, photometry · L1 site, scene, weather (scene and weather may use
 //! site) ·
 //! L2 sky, sources · L3 hierarchy · L4 projection · L5 transfer · L6 sensors ·
-//! L8 sequence · L9 cli.
+//! L7 metrics, export (export may use metrics) · L8 sequence · L9 cli.
 #![warn(missing_docs)]
 
 // L0 foundations
@@ -49,6 +49,9 @@ pub mod transfer; // direct transfer to elements
 // L6 results
 pub mod radiosity; // hierarchical Monte Carlo radiosity: interreflection after the direct shoot
 pub mod sensors; // sensor illuminance from every source, with error estimate
+
+// L7 results over time
+pub mod metrics; // annual metrics (DA, cDA, UDI, ASE, sDA, DF) as honeybee computes them
 
 // L8 orchestration
 pub mod sequence; // one run: config, pipeline, report, outputs
