@@ -51,6 +51,7 @@ pub mod radiosity; // hierarchical Monte Carlo radiosity: interreflection after 
 pub mod sensors; // sensor illuminance from every source, with error estimate
 
 // L7 results over time
+pub mod export; // illuminance.csv (stream, read, merge shards), .ill, metrics.csv, summary.json, surfaces.csv
 pub mod metrics; // annual metrics (DA, cDA, UDI, ASE, sDA, DF) as honeybee computes them
 
 // L8 orchestration
