@@ -20,9 +20,10 @@
 //! W/m²; illuminance lux = 179 × (0.265 R + 0.670 G + 0.065 B).
 //!
 //! Layers (a module uses only lower layers; `tests/layers.rs` checks it):
-//! L0 error, files, math, photometry · L1 site, scene (scene may use site) ·
+//! L0 error, files, math, photometry · L1 site, scene, weather (scene and weather may use
+//! site) ·
 //! L2 sky, sources · L3 hierarchy · L4 projection · L5 transfer · L6 sensors ·
-//! L8 sequence · L9 cli.
+//! L7 metrics, export (export may use metrics) · L8 sequence · L9 cli.
 #![warn(missing_docs)]
 
 // L0 foundations
@@ -32,8 +33,9 @@ pub mod math; // frames, spherical triangles, rasteriser, BVH, counter-based RNG
 pub mod photometry; // RGB ↔ lux at 179 lm/W
 
 // L1 inputs
-pub mod scene;
-pub mod site; // site, solar position // scene.toml, OBJ/MTL, .pts, generated scenes
+pub mod scene; // scene.toml, OBJ/MTL, .pts, generated scenes
+pub mod site; // site, solar position
+pub mod weather; // EPW and WEA weather files: site + DNI/DHI records at sun-evaluation times
 
 // L2 light
 pub mod sky; // sky radiance models and the sun
@@ -47,6 +49,10 @@ pub mod transfer; // direct transfer to elements
 // L6 results
 pub mod radiosity; // hierarchical Monte Carlo radiosity: interreflection after the direct shoot
 pub mod sensors; // sensor illuminance from every source, with error estimate
+
+// L7 results over time
+pub mod export; // illuminance.csv (stream, read, merge shards), .ill, metrics.csv, summary.json, surfaces.csv
+pub mod metrics; // annual metrics (DA, cDA, UDI, ASE, sDA, DF) as honeybee computes them
 
 // L8 orchestration
 pub mod sequence; // one run: config, pipeline, report, outputs

@@ -7,7 +7,7 @@ use std::path::Path;
 fn layer_of(module: &str) -> Option<u32> {
     Some(match module {
         "error" | "files" | "math" | "photometry" => 0,
-        "site" | "scene" => 1,
+        "site" | "scene" | "weather" => 1,
         "sky" | "sources" => 2,
         "hierarchy" => 3,
         "projection" => 4,
@@ -26,6 +26,8 @@ const SIBLINGS: &[(&str, &str)] = &[
     ("math", "error"),
     ("photometry", "error"),
     ("scene", "site"),
+    ("weather", "site"),
+    ("export", "metrics"),
     ("sources", "sky"),
     ("sensors", "radiosity"),
 ];
