@@ -21,10 +21,10 @@
 //!
 //! Layers (a module uses only lower layers; `tests/layers.rs` checks it):
 //! L0 error, files, math, photometry · L1 site, scene, weather (scene and weather may use
-//! site) ·
-//! L2 sky, sources · L3 hierarchy · L4 projection · L5 transfer · L6 sensors ·
-//! L7 metrics, export (export may use metrics) · L8 sequence · L9 cli.
+//! site) · L2 sky, sources · L3 hierarchy · L4 projection · L5 transfer, cache ·
+//! L6 sensors, radiosity · L7 metrics, export (export may use metrics) · L8 sequence · L9 cli.
 #![warn(missing_docs)]
+#![deny(unsafe_code)] // the one exception: cache::store::map_readonly
 
 // L0 foundations
 pub mod error; // Error enum: input errors name file, line, value
@@ -42,6 +42,7 @@ pub mod sky; // sky radiance models and the sun
 pub mod sources; // sky subdivision into parallel sources; snapped sun
 
 // L3–L5 the method
+pub mod cache; // direction-keyed, memory-mapped store of projection records
 pub mod hierarchy; // element quadtree keys and arena
 pub mod projection; // LDI per source, visibility ratio, refinement
 pub mod transfer; // direct transfer to elements

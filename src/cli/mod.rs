@@ -4,7 +4,7 @@
 use crate::error::{Error, Result};
 use crate::scene::Scene;
 use crate::sequence::{self, Quality, SkySpec};
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 
 /// daystep: incremental time-series daylight engine.
@@ -76,6 +76,115 @@ pub enum Command {
         #[arg(long)]
         seed: Option<u64>,
     },
+    /// Inspect or maintain a projection cache folder.
+    Cache {
+        /// What to do with the cache.
+        #[command(subcommand)]
+        action: CacheAction,
+    },
+}
+
+/// The cache folder argument of `daystep cache …`.
+#[derive(Args, Debug)]
+pub struct CacheDir {
+    /// Cache folder.
+    #[arg(long = "cache", default_value = "cache")]
+    pub dir: PathBuf,
+}
+
+/// `daystep cache` subcommands.
+#[derive(Subcommand, Debug)]
+pub enum CacheAction {
+    /// Number, size and age of the records.
+    Stats {
+        /// The folder.
+        #[command(flatten)]
+        cache: CacheDir,
+    },
+    /// Validate every record; exit 1 if any is invalid, unless --fix removes them.
+    Verify {
+        /// The folder.
+        #[command(flatten)]
+        cache: CacheDir,
+        /// Remove invalid records (they are rebuilt when next needed).
+        #[arg(long)]
+        fix: bool,
+    },
+    /// Remove all records and temporary files (keeps .gitignore, README.md, other files).
+    Clear {
+        /// The folder.
+        #[command(flatten)]
+        cache: CacheDir,
+    },
+}
+
+fn format_time(t: Option<std::time::SystemTime>) -> String {
+    t.map(|t| {
+        chrono::DateTime::<chrono::Local>::from(t)
+            .format("%Y-%m-%d %H:%M:%S")
+            .to_string()
+    })
+    .unwrap_or_else(|| "-".into())
+}
+
+fn run_cache(action: CacheAction) -> Result<()> {
+    match action {
+        CacheAction::Stats { cache } => {
+            let s = crate::cache::dir_stats(&cache.dir)?;
+            println!(
+                "{}: {} records, {} bytes ({:.1} MiB), {} temporary files, least recently used {}, most recently used {}",
+                cache.dir.display(),
+                s.files,
+                s.bytes,
+                s.bytes as f64 / (1u64 << 20) as f64,
+                s.temp_files,
+                format_time(s.oldest),
+                format_time(s.newest)
+            );
+            Ok(())
+        }
+        CacheAction::Verify { cache, fix } => {
+            let r = crate::cache::verify(&cache.dir)?;
+            for (path, reason) in &r.invalid {
+                println!("invalid: {}: {reason}", path.display());
+            }
+            for path in &r.foreign {
+                println!("not a cache file (left alone): {}", path.display());
+            }
+            let removed = if fix { r.remove_invalid() } else { 0 };
+            println!(
+                "{}: {} valid, {} invalid{}, {} temporary, {} foreign",
+                cache.dir.display(),
+                r.ok,
+                r.invalid.len(),
+                if fix {
+                    format!(" ({removed} removed)")
+                } else {
+                    String::new()
+                },
+                r.temp_files,
+                r.foreign.len()
+            );
+            if r.is_clean() || fix {
+                Ok(())
+            } else {
+                Err(Error::input(
+                    &cache.dir,
+                    None,
+                    None,
+                    format!(
+                        "{} invalid cache records (run `daystep cache verify --fix` to remove them)",
+                        r.invalid.len()
+                    ),
+                ))
+            }
+        }
+        CacheAction::Clear { cache } => {
+            let n = crate::cache::clear(&cache.dir)?;
+            println!("{}: removed {n} files", cache.dir.display());
+            Ok(())
+        }
+    }
 }
 
 fn need(name: &str, v: Option<f64>, sky: &str) -> Result<f64> {
@@ -118,6 +227,7 @@ fn sky_spec(
 /// Any library error, to be mapped to an exit code.
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::Cache { action } => run_cache(action),
         Command::Instant {
             scene,
             time,

@@ -1,0 +1,634 @@
+//! The cache folder: validated, memory-mapped reads; atomic, lock-free writes; size-limited
+//! least-recently-used eviction; counters; and maintenance (stats, verify, clear).
+//!
+//! Folder contents: `<64 hex>.dsr` records, temporary files `.<record name>.<pid>-<n>-<salt>.tmp`
+//! while a write is in flight, and a `.gitignore` written when the store creates the
+//! folder. Anything else is left alone.
+
+use super::record::{header_len, Invalid, MappedRecord, Record};
+use super::{RecordKey, RECORD_EXTENSION};
+use crate::error::{Error, Result};
+use memmap2::Mmap;
+use std::fs::{self, File, OpenOptions};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
+use std::sync::Mutex;
+use std::time::{Duration, SystemTime};
+
+/// Default size limit of a cache folder: 2 GiB.
+pub const DEFAULT_MAX_BYTES: u64 = 2 << 30;
+
+/// Temporary files older than this are leftovers of a crashed writer and may be removed.
+const STALE_TEMP: Duration = Duration::from_secs(3600);
+
+/// Files in a cache folder that are ours but not records; kept by [`clear`].
+const KEPT_NAMES: &[&str] = &[".gitignore", "README.md", "CACHEDIR.TAG"];
+
+/// Counters of one [`Store`] since it was opened. Every [`Store::get`] counts as exactly
+/// one of `hits`, `misses` (no file, or no usable folder) or `rebuilds` (an invalid file
+/// was found and removed; the caller recomputes).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct CacheStats {
+    /// Valid records returned.
+    pub hits: u64,
+    /// Lookups that found no record.
+    pub misses: u64,
+    /// Invalid records found (truncated, corrupt, other version or key, foreign), removed.
+    pub rebuilds: u64,
+    /// Records written.
+    pub writes: u64,
+    /// Writes that failed (the run goes on without caching that record).
+    pub write_failures: u64,
+    /// Records removed by the size limit.
+    pub evictions: u64,
+    /// Bytes of records mapped by hits.
+    pub bytes_mapped: u64,
+    /// Bytes of records written.
+    pub bytes_written: u64,
+}
+
+/// The on-disk cache: a folder of records. `Sync`: share one `&Store` between rayon tasks.
+/// No method returns an error or panics on bad files; failures become counters and
+/// warnings ([`Store::warnings`]).
+#[derive(Debug)]
+pub struct Store {
+    dir: Option<PathBuf>,
+    max_bytes: u64,
+    hits: AtomicU64,
+    misses: AtomicU64,
+    rebuilds: AtomicU64,
+    writes: AtomicU64,
+    write_failures: AtomicU64,
+    evictions: AtomicU64,
+    bytes_mapped: AtomicU64,
+    bytes_written: AtomicU64,
+    /// This process's estimate of the folder size, bytes (exact after each eviction scan).
+    tracked_bytes: AtomicU64,
+    temp_seq: AtomicU64,
+    temp_salt: u64,
+    warnings: Mutex<Vec<String>>,
+    warned_invalid: AtomicBool,
+    warned_read: AtomicBool,
+    warned_write: AtomicBool,
+    evicting: Mutex<()>,
+}
+
+/// Maps `file` read-only. The only `unsafe` code of daystep.
+#[allow(unsafe_code)]
+fn map_readonly(file: &File) -> std::io::Result<Mmap> {
+    // SAFETY: `Mmap::map` is unsafe because the mapped bytes could change (or vanish, if the
+    // file is truncated) while the map is alive, which Rust's `&[u8]` does not allow for.
+    // Why this is sound enough here:
+    // - daystep never modifies a record file in place: records are written to a unique
+    //   temporary file and renamed over the final name; a rename or an unlink (eviction,
+    //   `clear`, removal of invalid records) leaves this mapping's inode untouched;
+    // - the map is private to the returned `Mmap` and is only read after
+    //   `Record::validate` has checked lengths, bounds and both checksums of these bytes;
+    // - the documented remaining risk is a foreign process writing into or truncating a
+    //   record file in place while it is mapped: that can show changed bytes or raise
+    //   SIGBUS. Users are told not to edit cache files; `daystep cache clear` removes them
+    //   by unlinking, which is safe.
+    unsafe { Mmap::map(file) }
+}
+
+fn random_salt() -> u64 {
+    use std::hash::{BuildHasher, Hasher};
+    let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+    h.write_u128(
+        SystemTime::now()
+            .duration_since(SystemTime::UNIX_EPOCH)
+            .map(|d| d.as_nanos())
+            .unwrap_or(0),
+    );
+    h.finish()
+}
+
+impl Store {
+    fn with_dir(dir: Option<PathBuf>, max_bytes: u64) -> Store {
+        Store {
+            dir,
+            max_bytes,
+            hits: AtomicU64::new(0),
+            misses: AtomicU64::new(0),
+            rebuilds: AtomicU64::new(0),
+            writes: AtomicU64::new(0),
+            write_failures: AtomicU64::new(0),
+            evictions: AtomicU64::new(0),
+            bytes_mapped: AtomicU64::new(0),
+            bytes_written: AtomicU64::new(0),
+            tracked_bytes: AtomicU64::new(0),
+            temp_seq: AtomicU64::new(0),
+            temp_salt: random_salt(),
+            warnings: Mutex::new(Vec::new()),
+            warned_invalid: AtomicBool::new(false),
+            warned_read: AtomicBool::new(false),
+            warned_write: AtomicBool::new(false),
+            evicting: Mutex::new(()),
+        }
+    }
+
+    /// A store that caches nothing (`--no-cache`): every `get` is a miss, `put` does nothing.
+    pub fn disabled() -> Store {
+        Self::with_dir(None, 0)
+    }
+
+    /// Opens the cache folder `dir`, limited to `max_bytes` of records (e.g.
+    /// [`DEFAULT_MAX_BYTES`]). Never fails: a missing folder is created (with a
+    /// `.gitignore` of `*`); a folder that cannot be created or written (read-only, full)
+    /// gives a disabled store and one warning. A folder already over the limit is trimmed.
+    pub fn open(dir: &Path, max_bytes: u64) -> Store {
+        let mut store = Self::with_dir(None, max_bytes);
+        let existed = dir.is_dir();
+        if let Err(e) = fs::create_dir_all(dir) {
+            store.warn(format!(
+                "cache disabled: cannot create {}: {e}",
+                dir.display()
+            ));
+            return store;
+        }
+        if !existed {
+            let _ = fs::write(dir.join(".gitignore"), "*\n");
+        }
+        // Probe with a few KiB so that a full disk is noticed, not just a read-only folder.
+        let probe = dir.join(store.temp_name("probe.dsr"));
+        let probed = (|| {
+            let mut f = OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&probe)?;
+            f.write_all(&[0u8; 4096])?;
+            f.flush()
+        })();
+        let _ = fs::remove_file(&probe);
+        if let Err(e) = probed {
+            store.warn(format!(
+                "cache disabled: cannot write to {}: {e}",
+                dir.display()
+            ));
+            return store;
+        }
+        store.dir = Some(dir.to_path_buf());
+        let bytes = dir_stats(dir).map(|s| s.bytes).unwrap_or(0);
+        store.tracked_bytes.store(bytes, Relaxed);
+        if bytes > max_bytes {
+            store.evict();
+        }
+        store
+    }
+
+    /// The folder, or `None` when disabled.
+    pub fn dir(&self) -> Option<&Path> {
+        self.dir.as_deref()
+    }
+
+    /// True when records are read and written.
+    pub fn is_enabled(&self) -> bool {
+        self.dir.is_some()
+    }
+
+    /// Size limit of the folder's records, bytes.
+    pub fn max_bytes(&self) -> u64 {
+        self.max_bytes
+    }
+
+    /// The record of `key`, validated and memory-mapped, or `None` (a miss). An invalid
+    /// file (truncated, corrupt, another version or key, not a record) is removed, counted
+    /// in `rebuilds` and named in a warning (the first one per store; later ones are
+    /// summarised). A hit marks the file as recently used for eviction. Never panics.
+    pub fn get(&self, key: &RecordKey) -> Option<MappedRecord> {
+        let Some(dir) = &self.dir else {
+            self.misses.fetch_add(1, Relaxed);
+            return None;
+        };
+        let path = dir.join(key.file_name());
+        let file = match File::open(&path) {
+            Ok(f) => f,
+            Err(e) => {
+                if e.kind() != std::io::ErrorKind::NotFound {
+                    self.warn_once(&self.warned_read, || {
+                        format!("cache: cannot read {}: {e}", path.display())
+                    });
+                }
+                self.misses.fetch_add(1, Relaxed);
+                return None;
+            }
+        };
+        let len = match file.metadata() {
+            Ok(m) => m.len(),
+            Err(e) => return self.invalid(&path, Invalid::Unreadable(e.to_string())),
+        };
+        // Too short to hold a header: rejected without mapping (empty files cannot be mapped
+        // on every platform).
+        if len < header_len(0) as u64 {
+            return self.invalid(
+                &path,
+                Invalid::Truncated {
+                    len,
+                    needed: header_len(0) as u64,
+                },
+            );
+        }
+        let map = match map_readonly(&file) {
+            Ok(m) => m,
+            Err(e) => {
+                self.warn_once(&self.warned_read, || {
+                    format!("cache: cannot map {}: {e}", path.display())
+                });
+                self.misses.fetch_add(1, Relaxed);
+                return None;
+            }
+        };
+        match MappedRecord::from_map(map, key) {
+            Ok(r) => {
+                self.hits.fetch_add(1, Relaxed);
+                self.bytes_mapped.fetch_add(len, Relaxed);
+                // Least-recently-used bookkeeping; a file we may not touch (another user's)
+                // is simply evicted earlier.
+                let _ = file.set_modified(SystemTime::now());
+                Some(r)
+            }
+            Err(reason) => self.invalid(&path, reason),
+        }
+    }
+
+    fn invalid(&self, path: &Path, reason: Invalid) -> Option<MappedRecord> {
+        self.rebuilds.fetch_add(1, Relaxed);
+        // Another process may have replaced it with a valid record meanwhile; removing that
+        // costs one rebuild, never a wrong result.
+        let _ = fs::remove_file(path);
+        self.warn_once(&self.warned_invalid, || {
+            format!(
+                "cache: removed invalid record {} ({reason}); it will be rebuilt",
+                path.display()
+            )
+        });
+        None
+    }
+
+    /// Stores `bytes` (from [`super::encode`] or [`super::encode_direction`] with the same
+    /// key) as the record of `key`: written to a unique temporary file in the folder, then
+    /// renamed over the record's name. Concurrent writers of one key all complete; the last
+    /// rename wins and readers see one complete record or the other. Failures become a
+    /// warning and a `write_failures` count, never an error. Not synced to disk: a record
+    /// cut short by a power failure fails validation and is rebuilt. May evict old records.
+    pub fn put(&self, key: &RecordKey, bytes: &[u8]) {
+        let Some(dir) = &self.dir else { return };
+        let name = key.file_name();
+        let tmp = dir.join(self.temp_name(&name));
+        let result = (|| {
+            let mut f = OpenOptions::new().write(true).create_new(true).open(&tmp)?;
+            f.write_all(bytes)?;
+            f.set_modified(SystemTime::now())?;
+            drop(f);
+            fs::rename(&tmp, dir.join(&name))
+        })();
+        match result {
+            Ok(()) => {
+                let n = bytes.len() as u64;
+                self.writes.fetch_add(1, Relaxed);
+                self.bytes_written.fetch_add(n, Relaxed);
+                if self.tracked_bytes.fetch_add(n, Relaxed) + n > self.max_bytes {
+                    self.evict();
+                }
+            }
+            Err(e) => {
+                let _ = fs::remove_file(&tmp);
+                self.write_failures.fetch_add(1, Relaxed);
+                self.warn_once(&self.warned_write, || {
+                    format!("cache: cannot write {}: {e}", dir.join(&name).display())
+                });
+            }
+        }
+    }
+
+    /// Unique temporary name for `final_name`: process id, a per-store counter and a
+    /// random salt (two stores in one process, or a reused pid, never collide).
+    fn temp_name(&self, final_name: &str) -> String {
+        format!(
+            ".{final_name}.{}-{}-{:016x}.tmp",
+            std::process::id(),
+            self.temp_seq.fetch_add(1, Relaxed),
+            self.temp_salt
+        )
+    }
+
+    /// Removes least-recently-used records (oldest modification time first) until the
+    /// records take at most 90 % of `max_bytes` (the margin keeps every put from rescanning
+    /// the folder), and temporary files left by crashed writers. One thread at a time.
+    fn evict(&self) {
+        let Some(dir) = &self.dir else { return };
+        let Ok(_guard) = self.evicting.try_lock() else {
+            return; // another thread of this store is evicting right now
+        };
+        let Ok(entries) = fs::read_dir(dir) else {
+            return;
+        };
+        let now = SystemTime::now();
+        let mut records = Vec::new();
+        let mut total = 0u64;
+        for e in entries.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let Ok(meta) = e.metadata() else { continue };
+            let mtime = meta.modified().unwrap_or(SystemTime::UNIX_EPOCH);
+            match classify(&name) {
+                FileKind::Record if meta.is_file() => {
+                    total += meta.len();
+                    records.push((mtime, name, meta.len()));
+                }
+                FileKind::Temp if now.duration_since(mtime).is_ok_and(|age| age > STALE_TEMP) => {
+                    let _ = fs::remove_file(e.path());
+                }
+                _ => {}
+            }
+        }
+        let low_water = self.max_bytes - self.max_bytes / 10;
+        if total > self.max_bytes {
+            records.sort();
+            for (_, name, len) in records {
+                if total <= low_water {
+                    break;
+                }
+                if fs::remove_file(dir.join(&name)).is_ok() {
+                    self.evictions.fetch_add(1, Relaxed);
+                }
+                total = total.saturating_sub(len);
+            }
+        }
+        self.tracked_bytes.store(total, Relaxed);
+    }
+
+    /// A snapshot of the counters.
+    pub fn stats(&self) -> CacheStats {
+        CacheStats {
+            hits: self.hits.load(Relaxed),
+            misses: self.misses.load(Relaxed),
+            rebuilds: self.rebuilds.load(Relaxed),
+            writes: self.writes.load(Relaxed),
+            write_failures: self.write_failures.load(Relaxed),
+            evictions: self.evictions.load(Relaxed),
+            bytes_mapped: self.bytes_mapped.load(Relaxed),
+            bytes_written: self.bytes_written.load(Relaxed),
+        }
+    }
+
+    /// Warnings for the run report: disabled cache, the first invalid record, the first
+    /// failed read and write, and a count of further invalid records and failed writes.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut w = self.warnings.lock().map(|w| w.clone()).unwrap_or_default();
+        let more_invalid = self.rebuilds.load(Relaxed).saturating_sub(1);
+        if more_invalid > 0 {
+            w.push(format!(
+                "cache: {more_invalid} more invalid records removed and rebuilt"
+            ));
+        }
+        let more_failed = self.write_failures.load(Relaxed).saturating_sub(1);
+        if more_failed > 0 {
+            w.push(format!("cache: {more_failed} more record writes failed"));
+        }
+        w
+    }
+
+    fn warn(&self, message: String) {
+        if let Ok(mut w) = self.warnings.lock() {
+            w.push(message);
+        }
+    }
+
+    fn warn_once(&self, flag: &AtomicBool, message: impl FnOnce() -> String) {
+        if !flag.swap(true, Relaxed) {
+            self.warn(message());
+        }
+    }
+}
+
+/// What a name in a cache folder is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum FileKind {
+    /// `*.dsr`.
+    Record,
+    /// A temporary file of an in-flight (or crashed) write.
+    Temp,
+    /// `.gitignore` and the like: ours to keep.
+    Kept,
+    /// Anything else.
+    Foreign,
+}
+
+fn classify(name: &str) -> FileKind {
+    if KEPT_NAMES.contains(&name) {
+        FileKind::Kept
+    } else if name.starts_with('.') && name.ends_with(".tmp") && name.contains(".dsr.") {
+        FileKind::Temp
+    } else if name
+        .strip_suffix(RECORD_EXTENSION)
+        .is_some_and(|s| s.ends_with('.'))
+    {
+        FileKind::Record
+    } else {
+        FileKind::Foreign
+    }
+}
+
+/// Lists `dir` as (path, name, kind, metadata); a missing folder is empty.
+fn scan(dir: &Path) -> Result<Vec<(PathBuf, String, FileKind, fs::Metadata)>> {
+    let entries = match fs::read_dir(dir) {
+        Ok(e) => e,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => return Err(Error::io(dir, e)),
+    };
+    let mut out = Vec::new();
+    for e in entries {
+        let e = e.map_err(|err| Error::io(dir, err))?;
+        let Ok(meta) = e.metadata() else { continue }; // removed meanwhile
+        let name = e.file_name().to_string_lossy().into_owned();
+        let kind = if meta.is_file() {
+            classify(&name)
+        } else {
+            FileKind::Foreign
+        };
+        out.push((e.path(), name, kind, meta));
+    }
+    out.sort_by(|a, b| a.1.cmp(&b.1));
+    Ok(out)
+}
+
+/// Size and age of a cache folder's records.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct DirStats {
+    /// Record files (`*.dsr`).
+    pub files: u64,
+    /// Their total size, bytes.
+    pub bytes: u64,
+    /// Temporary files (writes in flight, or left by a crash).
+    pub temp_files: u64,
+    /// Modification (= last use) time of the least recently used record.
+    pub oldest: Option<SystemTime>,
+    /// Modification (= last use) time of the most recently used record.
+    pub newest: Option<SystemTime>,
+}
+
+/// Counts the records of `dir` (a missing folder has none).
+///
+/// # Errors
+/// [`Error::Io`] when the folder cannot be listed.
+pub fn dir_stats(dir: &Path) -> Result<DirStats> {
+    let mut s = DirStats::default();
+    for (_, _, kind, meta) in scan(dir)? {
+        match kind {
+            FileKind::Record => {
+                s.files += 1;
+                s.bytes += meta.len();
+                if let Ok(t) = meta.modified() {
+                    s.oldest = Some(s.oldest.map_or(t, |o| o.min(t)));
+                    s.newest = Some(s.newest.map_or(t, |o| o.max(t)));
+                }
+            }
+            FileKind::Temp => s.temp_files += 1,
+            _ => {}
+        }
+    }
+    Ok(s)
+}
+
+/// Result of [`verify`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct VerifyReport {
+    /// Valid records.
+    pub ok: usize,
+    /// Invalid record files with the reason (a record whose embedded key does not give its
+    /// file name is [`Invalid::OtherKey`]).
+    pub invalid: Vec<(PathBuf, Invalid)>,
+    /// Files and folders that are not ours (left alone).
+    pub foreign: Vec<PathBuf>,
+    /// Temporary files (writes in flight, or left by a crash).
+    pub temp_files: usize,
+}
+
+impl VerifyReport {
+    /// True when no invalid record was found.
+    pub fn is_clean(&self) -> bool {
+        self.invalid.is_empty()
+    }
+
+    /// Removes the invalid files; returns how many were removed.
+    pub fn remove_invalid(&self) -> usize {
+        self.invalid
+            .iter()
+            .filter(|(p, _)| fs::remove_file(p).is_ok())
+            .count()
+    }
+}
+
+/// Validates every record of `dir` (header, lengths, bounds, both checksums) and checks
+/// that its embedded key gives its file name. Reads files, does not map them, changes
+/// nothing. A missing folder is clean.
+///
+/// # Errors
+/// [`Error::Io`] when the folder cannot be listed.
+pub fn verify(dir: &Path) -> Result<VerifyReport> {
+    let mut report = VerifyReport::default();
+    for (path, name, kind, _) in scan(dir)? {
+        match kind {
+            FileKind::Record => {
+                let outcome = match fs::read(&path) {
+                    Ok(bytes) => Record::parse(&bytes).and_then(|r| {
+                        if r.key().file_name() == name {
+                            Ok(())
+                        } else {
+                            Err(Invalid::OtherKey)
+                        }
+                    }),
+                    Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+                    Err(e) => Err(Invalid::Unreadable(e.to_string())),
+                };
+                match outcome {
+                    Ok(()) => report.ok += 1,
+                    Err(reason) => report.invalid.push((path, reason)),
+                }
+            }
+            FileKind::Temp => report.temp_files += 1,
+            FileKind::Kept => {}
+            FileKind::Foreign => report.foreign.push(path),
+        }
+    }
+    Ok(report)
+}
+
+/// Removes the records (`*.dsr`) and temporary files of `dir`; keeps everything else
+/// (`.gitignore`, `README.md`, foreign files). Returns the number of files removed; a
+/// missing folder gives 0.
+///
+/// # Errors
+/// [`Error::Io`] when the folder cannot be listed or a file cannot be removed.
+pub fn clear(dir: &Path) -> Result<usize> {
+    let mut n = 0;
+    for (path, _, kind, _) in scan(dir)? {
+        if matches!(kind, FileKind::Record | FileKind::Temp) {
+            match fs::remove_file(&path) {
+                Ok(()) => n += 1,
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                Err(e) => return Err(Error::io(&path, e)),
+            }
+        }
+    }
+    Ok(n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cache::key::{SceneHash, KIND_SKY_NODE};
+    use crate::cache::record::{encode, Section};
+
+    fn key(d: u64) -> RecordKey {
+        RecordKey {
+            scene: SceneHash([9; 32]),
+            kind: KIND_SKY_NODE,
+            direction: d,
+            resolution: 64,
+        }
+    }
+
+    #[test]
+    fn names_are_classified() {
+        assert_eq!(classify("ab.dsr"), FileKind::Record);
+        assert_eq!(classify(".ab.dsr.12-0-00ff.tmp"), FileKind::Temp);
+        assert_eq!(classify(".gitignore"), FileKind::Kept);
+        assert_eq!(classify("README.md"), FileKind::Kept);
+        assert_eq!(classify("notes.txt"), FileKind::Foreign);
+        assert_eq!(classify("dsr"), FileKind::Foreign);
+    }
+
+    #[test]
+    fn put_get_and_counters() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(&dir.path().join("c"), DEFAULT_MAX_BYTES);
+        assert!(store.is_enabled(), "{:?}", store.warnings());
+        assert!(dir.path().join("c/.gitignore").is_file());
+        assert!(store.get(&key(1)).is_none());
+        let vals = [1.0, 2.0];
+        let bytes = encode(&key(1), &[Section::f64s(300, &vals)]);
+        store.put(&key(1), &bytes);
+        let r = store.get(&key(1)).unwrap();
+        assert!(r.is_mapped());
+        assert_eq!(r.bytes(), &bytes[..]);
+        assert_eq!(r.f64s(300).unwrap(), &vals);
+        let s = store.stats();
+        assert_eq!((s.hits, s.misses, s.writes, s.rebuilds), (1, 1, 1, 0));
+        assert_eq!(s.bytes_written, bytes.len() as u64);
+        assert_eq!(s.bytes_mapped, bytes.len() as u64);
+        assert!(store.warnings().is_empty());
+        let d = dir_stats(&dir.path().join("c")).unwrap();
+        assert_eq!((d.files, d.bytes, d.temp_files), (1, bytes.len() as u64, 0));
+    }
+
+    #[test]
+    fn disabled_store_caches_nothing() {
+        let store = Store::disabled();
+        store.put(&key(1), &encode(&key(1), &[]));
+        assert!(store.get(&key(1)).is_none());
+        assert_eq!(store.stats().writes, 0);
+        assert!(!store.is_enabled());
+    }
+}
