@@ -1,28 +1,25 @@
 //! L6 sensor illuminance from every parallel source.
 //!
-//! A sky or ground node contributes L̂ · ∫_node V(ω) τ(ω) max(0, n·ω) dω. The integral is
-//! geometry only: where visibility is the same at the node's corners and centre it is the
-//! node's exact projected solid angle (Lambert's contour formula, clipped at the sensor's
-//! horizon); where it differs the node is split (same quadtree as the sky), the node with
-//! the largest visibility uncertainty first, until the sensor's summed uncertainty
-//! is below a tolerance or a maximum depth is reached — the paper's visibility-driven
-//! refinement, in direction space, driven by the stated error. The sun
-//! contributes E_n · cos θ · τ along its snapped direction. Radiance is applied per child of
-//! each node (the sources carry their four children's radiance), one level finer than the
-//! sources' L̂, and the difference to L̂ is reported as an error estimate. Visibility is an exact ray cast
+//! A sky or ground node contributes Σ_children L_c · ∫_child V(ω) τ(ω) max(0, n·ω) dω. The
+//! integral is geometry only ([`node_response`], cached by node key): where visibility is
+//! the same at a piece's corners and centre and provably holds for the whole piece it is
+//! the exact projected solid angle (Lambert's contour formula, clipped at the sensor's
+//! horizon); otherwise the piece is split (same quadtree as the sky) while it is wide or
+//! its visibility range is large, down to a maximum depth — the paper's visibility-driven
+//! refinement, in direction space. The sun contributes E_n · cos θ · τ along its snapped
+//! direction ([`sun_response`]). Radiance is applied per child of each node (the sources
+//! carry their four children's radiance), one level finer than the sources' L̂, and the
+//! difference to L̂ is reported as an error estimate. Visibility is an exact ray cast
 //! (two-sided opaque occluders, glazing multiplies by τ(θ)).
 
 use crate::math::bvh::Bvh;
 use crate::math::spherical_triangle::{
     self, clip_to_hemisphere, projected_solid_angle_polygon, split,
 };
-use crate::photometry::{grey, lux, Rgb};
+use crate::photometry::{grey, Rgb};
 use crate::scene::{Scene, Sensor};
-use crate::sources::Source;
 use glam::DVec3;
-use rayon::prelude::*;
-use std::cmp::Ordering;
-use std::collections::{BinaryHeap, HashMap};
+use std::collections::HashMap;
 
 /// Ray-casting view of a scene for visibility queries.
 pub struct Visibility<'a> {
@@ -231,84 +228,38 @@ fn clipped_psa(tri: &[DVec3; 3], n: DVec3) -> f64 {
     }
 }
 
-/// A partly visible (sub-)node waiting to be split or accepted.
-struct Pending {
-    /// Uncertainty of its contribution, lux (half range × psa × radiance).
-    u: f64,
-    /// Insertion order, for a deterministic tie break.
-    seq: u64,
-    source: usize,
-    /// The child of the source node it lies in; `None` for a whole source node.
-    child: Option<usize>,
-    tri: [DVec3; 3],
-    depth: u32,
-    mean: Rgb,
-    psa: f64,
+/// Geometry-only response of one sensor to one sky or ground node, for time series where
+/// the same node recurs under different skies: per child of the node (split order),
+/// ∫_child V(ω) τ(ω) max(0, n·ω) dω (RGB, sr); the sensor's irradiance from the node is
+/// Σ_c L_c ⊙ `child[c]` for child radiances L_c. Computed like [`sensor_direct`] but with a
+/// node-local, radiance-free stop rule, so it can be cached by node key.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct NodeResponse {
+    /// Visible projected solid angle per child, with glazing transmission (RGB, sr).
+    pub child: [Rgb; 4],
+    /// Visibility uncertainty per child: Σ half-range × projected solid angle of the
+    /// partly visible pieces accepted unsplit (grey, sr); × radiance gives W/m².
+    pub uncertainty: [f64; 4],
+    /// Rays cast.
+    pub rays: u64,
 }
 
-impl PartialEq for Pending {
-    fn eq(&self, o: &Self) -> bool {
-        self.cmp(o) == Ordering::Equal
-    }
-}
-impl Eq for Pending {}
-impl PartialOrd for Pending {
-    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
-        Some(self.cmp(o))
-    }
-}
-impl Ord for Pending {
-    fn cmp(&self, o: &Self) -> Ordering {
-        self.u.total_cmp(&o.u).then(o.seq.cmp(&self.seq))
-    }
-}
-
-/// Accumulates a node's contribution: fine (per-child radiance) and coarse (L̂).
-fn add(
-    out: &mut SensorDirect,
-    s: &Source,
-    child: Option<usize>,
-    value: Rgb,
-    psa_children: Option<[f64; 4]>,
-) {
-    let fine = match (child, psa_children) {
-        (Some(k), _) => s.child_radiance[k] * value,
-        (None, Some(w)) => {
-            let total: f64 = w.iter().sum();
-            if total > 0.0 {
-                (0..4).fold(Rgb::ZERO, |a, k| {
-                    a + s.child_radiance[k] * value * (w[k] / total)
-                })
-            } else {
-                Rgb::ZERO
-            }
-        }
-        (None, None) => s.radiance * value,
-    };
-    out.sky += fine;
-    out.radiance_error += fine - s.radiance * value;
-}
-
-/// Accepts a partly visible node at its sample mean and states its uncertainty.
-fn finish(out: &mut SensorDirect, s: &Source, item: &Pending, n: DVec3) {
-    let w = item
-        .child
-        .is_none()
-        .then(|| split(item.tri[0], item.tri[1], item.tri[2]).map(|k| clipped_psa(&k, n)));
-    add(out, s, item.child, item.mean * item.psa, w);
-    out.visibility_err_lux += item.u;
-}
-
-/// Direct irradiance of one sensor from every source. Partly visible nodes are split
-/// largest-uncertainty first (see [`SensorParams`]).
-pub fn sensor_direct(
+/// The [`NodeResponse`] of `sensor` to the node with vertices `tri`. Pieces are split while
+/// wide (see [`SensorParams::sample_angle_deg`]) or partly visible with half-range ×
+/// projected solid angle above `visibility_tolerance` × the node's projected solid angle / 4,
+/// down to `visibility_depth`.
+pub fn node_response(
     vis: &Visibility,
     sensor: &Sensor,
-    sources: &[Source],
+    tri: [DVec3; 3],
     params: &SensorParams,
-) -> SensorDirect {
-    let mut out = SensorDirect::default();
+) -> NodeResponse {
     let (p, n) = (sensor.position, sensor.normal);
+    let mut out = NodeResponse::default();
+    let node_psa = clipped_psa(&tri, n);
+    if node_psa <= 0.0 {
+        return out;
+    }
     let mut rays = Rays {
         vis,
         p,
@@ -316,123 +267,98 @@ pub fn sensor_direct(
         memo: HashMap::new(),
         cast: 0,
     };
-    let mut heap = BinaryHeap::new();
-    let mut seq = 0;
-    let mut pending_err = 0.0;
-    let mut pending_value = 0.0;
+    let tol = params.visibility_tolerance * node_psa / 4.0;
     let max_cos = (0.5 * params.sample_angle_deg).to_radians().cos();
-    for (i, s) in sources.iter().enumerate() {
-        let Some(tri) = s.vertices else {
-            let cos = n.dot(s.true_direction);
-            if cos > 0.0 {
-                rays.cast += 1;
-                out.sun += s.normal_irradiance
-                    * vis.transmission_for(p, s.direction, s.true_direction)
-                    * cos;
-            }
+    // The node's own children first, so every piece belongs to one child.
+    let mut stack: Vec<([DVec3; 3], usize, u32)> = split(tri[0], tri[1], tri[2])
+        .into_iter()
+        .enumerate()
+        .rev()
+        .map(|(k, t)| (t, k, 1))
+        .collect();
+    while let Some((t, child, depth)) = stack.pop() {
+        let Some(ns) = rays.sample(&t) else {
             continue;
         };
-        // Sample; accept what is proven, split what is wide, trust the samples of the rest
-        // (see `sample_angle_deg`).
-        let mut stack = vec![(tri, None::<usize>, 0u32)];
-        while let Some((t, child, depth)) = stack.pop() {
-            let Some(ns) = rays.sample(&t) else {
-                continue;
-            };
-            let c = spherical_triangle::centre(t[0], t[1], t[2]);
-            let wide = t.iter().any(|v| v.dot(c) < max_cos);
-            if !ns.proven && wide && depth < params.visibility_depth {
-                for (k, sub) in split(t[0], t[1], t[2]).into_iter().enumerate().rev() {
-                    stack.push((sub, child.or(Some(k)), depth + 1));
-                }
-                continue;
+        let c = spherical_triangle::centre(t[0], t[1], t[2]);
+        let wide = t.iter().any(|v| v.dot(c) < max_cos);
+        let unsure = !ns.uniform && ns.half_range * ns.psa > tol;
+        if !ns.proven && (wide || unsure) && depth < params.visibility_depth {
+            for sub in split(t[0], t[1], t[2]).into_iter().rev() {
+                stack.push((sub, child, depth + 1));
             }
-            if ns.uniform {
-                let w = child
-                    .is_none()
-                    .then(|| split(t[0], t[1], t[2]).map(|k| clipped_psa(&k, n)));
-                add(&mut out, s, child, ns.mean * ns.psa, w);
-            } else {
-                let l = child.map_or(s.radiance, |k| s.child_radiance[k]);
-                let u = ns.half_range * ns.psa * lux(l);
-                pending_err += u;
-                pending_value += lux(s.radiance * ns.mean * ns.psa);
-                seq += 1;
-                heap.push(Pending {
-                    u,
-                    seq,
-                    source: i,
-                    child,
-                    tri: t,
-                    depth,
-                    mean: ns.mean,
-                    psa: ns.psa,
-                });
-            }
-        }
-    }
-    while !heap.is_empty() {
-        let estimate = lux(out.sun + out.sky) + pending_value;
-        if pending_err <= params.visibility_tolerance * estimate {
-            break;
-        }
-        let top = heap.pop().expect("peeked");
-        if top.depth >= params.visibility_depth {
-            // As deep as allowed: accept at its sample mean, uncertainty stated.
-            pending_err -= top.u;
-            pending_value -= lux(sources[top.source].radiance * top.mean * top.psa);
-            finish(&mut out, &sources[top.source], &top, n);
             continue;
         }
-        pending_err -= top.u;
-        let s = &sources[top.source];
-        pending_value -= lux(s.radiance * top.mean * top.psa);
-        for (k, sub) in split(top.tri[0], top.tri[1], top.tri[2])
-            .into_iter()
-            .enumerate()
-        {
-            let child = top.child.or(Some(k));
-            let Some(ns) = rays.sample(&sub) else {
-                continue;
-            };
-            if ns.uniform {
-                add(&mut out, s, child, ns.mean * ns.psa, None);
-            } else {
-                let u = ns.half_range * ns.psa * lux(s.child_radiance[child.expect("set above")]);
-                pending_err += u;
-                pending_value += lux(s.radiance * ns.mean * ns.psa);
-                seq += 1;
-                heap.push(Pending {
-                    u,
-                    seq,
-                    source: top.source,
-                    child,
-                    tri: sub,
-                    depth: top.depth + 1,
-                    mean: ns.mean,
-                    psa: ns.psa,
-                });
-            }
+        out.child[child] += ns.mean * ns.psa;
+        if !ns.uniform {
+            out.uncertainty[child] += ns.half_range * ns.psa;
         }
-    }
-    // Accept what is left at its sample mean; its range is the stated uncertainty.
-    for item in heap.into_sorted_vec() {
-        finish(&mut out, &sources[item.source], &item, n);
     }
     out.rays = rays.cast;
     out
 }
 
-/// Direct irradiance of every sensor (in order), computed in parallel; the result does not
-/// depend on the thread count.
-pub fn all_sensors_direct(
-    vis: &Visibility,
-    sensors: &[Sensor],
-    sources: &[Source],
-    params: &SensorParams,
-) -> Vec<SensorDirect> {
-    sensors
-        .par_iter()
-        .map(|s| sensor_direct(vis, s, sources, params))
-        .collect()
+/// Geometry-only response of one sensor to the sun along the snapped direction `dir`:
+/// the transmission (RGB) of the ray, and whether it crossed glazing (whose τ(θ) must then
+/// be re-evaluated at the true sun direction: [`Visibility::transmission_for`]). The
+/// irradiance is E_n ⊙ transmission × max(0, n·true direction).
+pub fn sun_response(vis: &Visibility, sensor: &Sensor, dir: DVec3) -> (Rgb, bool) {
+    if sensor.normal.dot(dir) <= -1e-3 {
+        return (Rgb::ZERO, false);
+    }
+    let (t, _, glazing) = vis.trace(sensor.position, dir, dir);
+    (t, glazing && t != Rgb::ZERO)
+}
+
+#[cfg(test)]
+mod response_tests {
+    use super::*;
+    use crate::scene::{Material, ModelInput, Triangle};
+    use crate::sources::SkyNodeKey;
+
+    #[test]
+    fn unobstructed_nodes_sum_to_pi_and_children_to_their_psa() {
+        // A lone upward sensor over a tiny floor: Σ over the upper hemisphere's nodes of
+        // the visible projected solid angle is π (Lambert), each child's its exact psa.
+        let input = ModelInput {
+            materials: vec![Material {
+                name: "floor".into(),
+                kd: Rgb::splat(0.2),
+                tf: Rgb::ZERO,
+                ke: Rgb::ZERO,
+            }],
+            triangles: vec![Triangle {
+                v: [
+                    DVec3::new(-0.1, -0.1, 0.0),
+                    DVec3::new(0.1, -0.1, 0.0),
+                    DVec3::new(0.0, 0.1, 0.0),
+                ],
+                material: 0,
+                group: 0,
+            }],
+            sensors: vec![(DVec3::new(0.0, 0.0, 0.5), DVec3::Z)],
+            ..ModelInput::default()
+        };
+        let scene = Scene::from_model(std::path::Path::new("<t>"), input).unwrap();
+        let vis = Visibility::new(&scene);
+        let p = SensorParams::default();
+        let mut total = 0.0;
+        for base in 0..4 {
+            for k in 0..4 {
+                let node = SkyNodeKey::root(base).child(k);
+                let v = node.vertices();
+                let r = node_response(&vis, &scene.sensors[0], v, &p);
+                let exact: Vec<f64> = split(v[0], v[1], v[2])
+                    .iter()
+                    .map(|c| clipped_psa(c, DVec3::Z))
+                    .collect();
+                for (c, e) in exact.iter().enumerate() {
+                    assert!((r.child[c].x - e).abs() < 1e-12, "{base}/{k}/{c}");
+                    assert_eq!(r.uncertainty[c], 0.0);
+                }
+                total += r.child.iter().map(|x| x.x).sum::<f64>();
+            }
+        }
+        assert!((total - std::f64::consts::PI).abs() < 1e-9, "{total}");
+    }
 }

@@ -46,13 +46,16 @@ impl Default for ProjectionParams {
 
 impl ProjectionParams {
     /// Resolution for a source with irradiance `e` when the brightest has `e_max`: the pixel
-    /// count is proportional to the irradiance (§5.1), clamped to the bounds.
+    /// count is proportional to the irradiance (§5.1), rounded up to a power of two (so the
+    /// same direction under another sky usually asks for the same projection, which the
+    /// cache can then reuse), clamped to the bounds.
     pub fn resolution_for(&self, e: f64, e_max: f64) -> u32 {
         if e_max <= 0.0 || e <= 0.0 {
             return self.min_resolution;
         }
         let r = self.max_resolution as f64 * (e / e_max).sqrt();
-        (r.round() as u32).clamp(self.min_resolution, self.max_resolution)
+        let r = (r.ceil().max(1.0) as u32).next_power_of_two();
+        r.clamp(self.min_resolution, self.max_resolution)
     }
 }
 

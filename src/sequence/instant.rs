@@ -2,6 +2,7 @@
 //! sensors, with a discretisation-error estimate from one coarser level.
 
 use super::config::{Quality, SkySpec, Solver};
+use super::directions::{DirectionData, Directions};
 use super::report::{Counts, Report, StageTimes, SunReport};
 use crate::error::{Error, Result};
 use crate::hierarchy::Hierarchy;
@@ -9,7 +10,7 @@ use crate::photometry::{grey, lux};
 use crate::projection::{self, DirectionRecord, ProjectionScene};
 use crate::radiosity::{self, RadiosityState, Tracer, Transport, TransportState};
 use crate::scene::Scene;
-use crate::sensors::{all_sensors_direct, SensorDirect, Visibility};
+use crate::sensors::SensorDirect;
 use crate::site::solar_position::{solar_position, SolarPosition};
 use crate::sky::{self, Sky};
 use crate::sources::{self, Source, SourceKey};
@@ -157,8 +158,61 @@ pub fn direct_light(
     (sources, hierarchy, direct)
 }
 
-/// Runs one instant on `scene` for the sky `sky` (already built for the instant).
+/// Runs one instant on `scene` for the sky `sky` (already built for the instant), without
+/// a disk cache.
 pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report) -> InstantResult {
+    let store = crate::cache::Store::disabled();
+    let dirs = Directions::new(scene, quality, &store);
+    let coarse = Directions::new(scene, &quality.coarser(), &store);
+    run_sky_with(scene, sky, &dirs, &coarse, report)
+}
+
+/// Direct irradiance of every sensor from the sources' cached responses: sky and ground
+/// nodes as Σ_children L_c ⊙ response_c, the sun as E_n ⊙ transmission × cos θ (true sun
+/// direction), with the visibility uncertainty and the per-child-vs-node radiance
+/// difference as error terms.
+pub fn sensors_from_responses(
+    dirs: &Directions,
+    sources: &[Source],
+    data: &[std::sync::Arc<DirectionData>],
+) -> Vec<SensorDirect> {
+    let scene = dirs.scene();
+    (0..scene.sensors.len())
+        .map(|k| {
+            let n = scene.sensors[k].normal;
+            let mut out = SensorDirect::default();
+            for (s, d) in sources.iter().zip(data) {
+                let r = &d.sensors[k];
+                out.rays += d.rays / scene.sensors.len().max(1) as u64;
+                if s.vertices.is_none() {
+                    let cos = n.dot(s.true_direction);
+                    if cos > 0.0 {
+                        out.sun += s.normal_irradiance * dirs.sun_transmission(k, s, r) * cos;
+                    }
+                    continue;
+                }
+                for c in 0..4 {
+                    let fine = s.child_radiance[c] * r.child[c];
+                    out.sky += fine;
+                    out.radiance_error += fine - s.radiance * r.child[c];
+                    out.visibility_err_lux += lux(s.child_radiance[c]) * r.uncertainty[c];
+                }
+            }
+            out
+        })
+        .collect()
+}
+
+/// [`run_sky`] through per-direction data `dirs` (the run's quality and cache) and
+/// `coarse` (the same one level coarser, for the error estimate).
+pub fn run_sky_with(
+    scene: &Scene,
+    sky: &Sky,
+    dirs: &Directions,
+    coarse_dirs: &Directions,
+    report: &mut Report,
+) -> InstantResult {
+    let quality = dirs.quality();
     let mut times = std::mem::take(&mut report.stage_seconds);
     let (sources, negligible, snap_err) = times.time("sources", || sources_for(sky, quality));
     let mut counts = Counts {
@@ -197,14 +251,14 @@ pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report)
         report.sun.max_shadow_shift_m = diagonal * e.to_radians();
     }
 
-    let records = times.time("projection", || project_sources(scene, &sources, quality));
+    let data = times.time("directions", || dirs.get_all(&sources));
+    let records: Vec<&DirectionRecord> = data.iter().map(|d| &d.record).collect();
     if scene.triangles.is_empty() {
         report
             .skipped
             .push("projections: the scene has no geometry".into());
     }
     for (s, r) in sources.iter().zip(&records) {
-        counts.ldis_built += usize::from(!scene.triangles.is_empty());
         counts.ldi_pixels += r.stats.width as u64 * r.stats.height as u64;
         counts.ldi_fragments += r.stats.fragments;
         counts.splits += r.stats.elements_split;
@@ -223,8 +277,7 @@ pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report)
     }
     let mut hierarchy = Hierarchy::new(scene);
     let direct = times.time("transfer", || {
-        let refs: Vec<&DirectionRecord> = records.iter().collect();
-        transfer::transfer(&mut hierarchy, &sources, &refs)
+        transfer::transfer(&mut hierarchy, &sources, &records)
     });
     counts.elements_after = hierarchy.leaf_count();
 
@@ -280,14 +333,12 @@ pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report)
             .skipped
             .push("sensor gather: the scene has no sensors".into());
     } else {
-        let vis = times.time("bvh", || Visibility::new(scene));
-        let fine: Vec<SensorDirect> = times.time("sensors", || {
-            all_sensors_direct(&vis, &scene.sensors, &sources, &quality.sensors)
-        });
-        let coarse_q = quality.coarser();
+        let fine: Vec<SensorDirect> =
+            times.time("sensors", || sensors_from_responses(dirs, &sources, &data));
         let coarse: Vec<SensorDirect> = times.time("error_estimate", || {
-            let (cs, _, _) = sources_for(sky, &coarse_q);
-            all_sensors_direct(&vis, &scene.sensors, &cs, &coarse_q.sensors)
+            let (cs, _, _) = sources_for(sky, coarse_dirs.quality());
+            let cdata = coarse_dirs.get_all(&cs);
+            sensors_from_responses(coarse_dirs, &cs, &cdata)
         });
         let none = || vec![radiosity::SensorIndirect::default(); scene.sensors.len()];
         let (indirect, indirect_coarse) = match &solution {
@@ -381,6 +432,9 @@ pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report)
         .map(|v| v.lux_err / v.lux)
         .fold(0.0, f64::max);
     report.warnings.extend(sky.warnings.iter().cloned());
+    let dc = dirs.counts();
+    counts.ldis_built = dc.built as usize;
+    counts.ldis_reused = (dc.from_cache + dc.reused) as usize;
     report.counts = counts;
     report.stage_seconds = times;
     InstantResult {

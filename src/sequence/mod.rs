@@ -2,6 +2,7 @@
 //! instant is a sequence of one step.
 
 pub mod config;
+pub mod directions;
 pub mod instant;
 pub mod report;
 

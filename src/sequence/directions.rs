@@ -1,0 +1,254 @@
+//! Per-direction data of a run: each source direction's projection record (which elements
+//! its parallel beam reaches, with what weight) and every sensor's geometry-only response
+//! to it. Both depend on geometry, glazing, sensors and parameters only, so they are read
+//! from the on-disk cache ([`crate::cache`]) when present and computed and stored
+//! otherwise; within a run they are also kept in memory, so a sequence computes each
+//! direction once.
+
+use super::config::Quality;
+use crate::cache::{self, MappedRecord, RecordKey, SceneHash, Section, Store, FIRST_USER_TAG};
+use crate::photometry::{grey, Rgb};
+use crate::projection::{self, DirectionRecord, ProjectionScene};
+use crate::scene::Scene;
+use crate::sensors::{node_response, sun_response, NodeResponse, Visibility};
+use crate::sources::{Source, SourceKey};
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+
+/// Section tag of the per-sensor responses: 16 f64 per sensor (4 children × RGB, then 4
+/// uncertainties); for the sun, child 0 holds the transmission and child 1's first value
+/// is 1 when the ray crossed glazing.
+const TAG_SENSORS: u32 = FIRST_USER_TAG;
+const PER_SENSOR: usize = 16;
+
+/// What one direction yields.
+#[derive(Clone, Debug, Default)]
+pub struct DirectionData {
+    /// The projection: lit leaves and their transfer weights.
+    pub record: DirectionRecord,
+    /// Per sensor (in order), its response ([`NodeResponse`]; for the sun, the
+    /// transmission in `child[0]`).
+    pub sensors: Vec<NodeResponse>,
+    /// Rays cast for the sensor responses (0 when read from the cache).
+    pub rays: u64,
+}
+
+/// Counters of a run's direction lookups.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct DirectionCounts {
+    /// Directions computed (projection + sensor responses).
+    pub built: u64,
+    /// Directions read from the on-disk cache.
+    pub from_cache: u64,
+    /// Directions found in this run's memory (a sequence's repeated directions).
+    pub reused: u64,
+}
+
+/// The per-direction data of one scene and quality, cached on disk and in memory.
+pub struct Directions<'a> {
+    scene: &'a Scene,
+    pscene: ProjectionScene,
+    vis: Visibility<'a>,
+    store: &'a Store,
+    hash: SceneHash,
+    quality: Quality,
+    memo: Mutex<HashMap<(SourceKey, u32), Arc<DirectionData>>>,
+    built: AtomicU64,
+    from_cache: AtomicU64,
+    reused: AtomicU64,
+}
+
+impl<'a> Directions<'a> {
+    /// Prepares lookups for `scene` at `quality` through `store` (use
+    /// [`Store::disabled`] for no disk cache).
+    pub fn new(scene: &'a Scene, quality: &Quality, store: &'a Store) -> Directions<'a> {
+        let s = &quality.sensors;
+        let mut extra = Vec::new();
+        extra.extend_from_slice(&s.visibility_depth.to_le_bytes());
+        extra.extend_from_slice(&s.visibility_tolerance.to_bits().to_le_bytes());
+        extra.extend_from_slice(&s.sample_angle_deg.to_bits().to_le_bytes());
+        Directions {
+            scene,
+            pscene: ProjectionScene::new(scene),
+            vis: Visibility::new(scene),
+            store,
+            hash: cache::scene_hash(scene, &quality.projection, &extra),
+            quality: *quality,
+            memo: Mutex::new(HashMap::new()),
+            built: AtomicU64::new(0),
+            from_cache: AtomicU64::new(0),
+            reused: AtomicU64::new(0),
+        }
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> &Scene {
+        self.scene
+    }
+
+    /// Transmission (RGB) from sensor `k` towards the sun `source`: the cached response,
+    /// with glazing τ(θ) re-evaluated at the true (unsnapped) sun direction.
+    pub fn sun_transmission(&self, k: usize, source: &Source, response: &NodeResponse) -> Rgb {
+        if response.child[1].x > 0.0 {
+            let s = &self.scene.sensors[k];
+            self.vis
+                .transmission_for(s.position, source.direction, source.true_direction)
+        } else {
+            response.child[0]
+        }
+    }
+
+    /// The quality these directions are computed at.
+    pub fn quality(&self) -> &Quality {
+        &self.quality
+    }
+
+    /// The counters so far.
+    pub fn counts(&self) -> DirectionCounts {
+        DirectionCounts {
+            built: self.built.load(Ordering::Relaxed),
+            from_cache: self.from_cache.load(Ordering::Relaxed),
+            reused: self.reused.load(Ordering::Relaxed),
+        }
+    }
+
+    /// The data of every source (in order), at the resolution its share of the brightest
+    /// source's irradiance asks for; missing directions are computed in parallel.
+    pub fn get_all(&self, sources: &[Source]) -> Vec<Arc<DirectionData>> {
+        let e_max = sources
+            .iter()
+            .map(|s| grey(s.normal_irradiance))
+            .fold(0.0, f64::max);
+        sources
+            .par_iter()
+            .map(|s| {
+                let res = self
+                    .quality
+                    .projection
+                    .resolution_for(grey(s.normal_irradiance), e_max);
+                self.get(s, res)
+            })
+            .collect()
+    }
+
+    /// The data of one source at LDI resolution `resolution`.
+    pub fn get(&self, source: &Source, resolution: u32) -> Arc<DirectionData> {
+        let id = (source.key, resolution);
+        if let Some(d) = self.memo.lock().expect("memo lock").get(&id) {
+            self.reused.fetch_add(1, Ordering::Relaxed);
+            return d.clone();
+        }
+        let key = RecordKey::for_source(self.hash, source.key, resolution);
+        let from_disk = key
+            .as_ref()
+            .and_then(|k| self.store.get(k))
+            .and_then(|r| self.decode(&r));
+        let data = match from_disk {
+            Some(d) => {
+                self.from_cache.fetch_add(1, Ordering::Relaxed);
+                d
+            }
+            None => {
+                let d = self.compute(source, resolution);
+                if let Some(k) = &key {
+                    if self.store.is_enabled() {
+                        let flat = flatten(&d.sensors);
+                        let bytes = cache::encode_direction(
+                            k,
+                            &d.record,
+                            &[Section::f64s(TAG_SENSORS, &flat)],
+                        );
+                        self.store.put(k, &bytes);
+                    }
+                }
+                self.built.fetch_add(1, Ordering::Relaxed);
+                d
+            }
+        };
+        let data = Arc::new(data);
+        self.memo
+            .lock()
+            .expect("memo lock")
+            .entry(id)
+            .or_insert(data)
+            .clone()
+    }
+
+    fn compute(&self, source: &Source, resolution: u32) -> DirectionData {
+        let record = if self.scene.triangles.is_empty() {
+            DirectionRecord::default()
+        } else {
+            projection::project(
+                &self.pscene,
+                source.direction,
+                resolution,
+                &self.quality.projection,
+            )
+        };
+        let mut rays = 0;
+        let sensors = self
+            .scene
+            .sensors
+            .iter()
+            .map(|s| match source.vertices {
+                Some(tri) => {
+                    let r = node_response(&self.vis, s, tri, &self.quality.sensors);
+                    rays += r.rays;
+                    r
+                }
+                None => {
+                    rays += 1;
+                    let mut r = NodeResponse::default();
+                    let (t, glazed) = sun_response(&self.vis, s, source.direction);
+                    r.child[0] = t;
+                    r.child[1].x = if glazed { 1.0 } else { 0.0 };
+                    r
+                }
+            })
+            .collect();
+        DirectionData {
+            record,
+            sensors,
+            rays,
+        }
+    }
+
+    /// A cached record, or `None` (counted as a rebuild by the store's validation when it
+    /// is not ours) if its sections do not fit this scene.
+    fn decode(&self, r: &MappedRecord) -> Option<DirectionData> {
+        let record = cache::decode_direction(r).ok()?;
+        let flat = r.f64s(TAG_SENSORS).ok()?;
+        if flat.len() != PER_SENSOR * self.scene.sensors.len() {
+            return None;
+        }
+        let sensors = flat
+            .chunks_exact(PER_SENSOR)
+            .map(|c| {
+                let mut n = NodeResponse::default();
+                for k in 0..4 {
+                    n.child[k] = Rgb::new(c[3 * k], c[3 * k + 1], c[3 * k + 2]);
+                    n.uncertainty[k] = c[12 + k];
+                }
+                n
+            })
+            .collect();
+        Some(DirectionData {
+            record,
+            sensors,
+            rays: 0,
+        })
+    }
+}
+
+fn flatten(sensors: &[NodeResponse]) -> Vec<f64> {
+    let mut flat = Vec::with_capacity(PER_SENSOR * sensors.len());
+    for n in sensors {
+        for c in &n.child {
+            flat.extend_from_slice(&c.to_array());
+        }
+        flat.extend_from_slice(&n.uncertainty);
+    }
+    flat
+}
