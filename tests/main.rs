@@ -3,6 +3,7 @@
 mod util; // scene builders in code, closed-form helpers, assert helpers
 
 mod cache; // projection cache: round trips, bad files rebuilt, eviction, concurrent writers, CLI
+mod cache_runs; // the cache in whole runs: warm = cold, Kd/site/weather hit, vertex misses, damage, 4 processes
 mod cli; // the binary end to end: exit codes, messages naming file:line, outputs
 mod extremes; // low sun, polar day and night, turbidity limits, slivers, far coordinates
 mod layers; // the layer rule of lib.rs: lower layers never import higher ones

@@ -69,9 +69,13 @@ pub enum Command {
         /// Quality preset: draft, default, high, reference.
         #[arg(long, default_value = "default")]
         quality: String,
-        /// Cache folder (reserved: projection caching is not implemented yet).
+        /// Projection cache folder (created if missing; a folder that cannot be written
+        /// is used read-only or not at all, with a warning).
+        #[arg(long, default_value = "cache")]
+        cache: PathBuf,
+        /// Run without the projection cache.
         #[arg(long)]
-        cache: Option<PathBuf>,
+        no_cache: bool,
         /// Seed of the Monte Carlo interreflection (results are a pure function of it).
         #[arg(long)]
         seed: Option<u64>,
@@ -221,6 +225,15 @@ fn sky_spec(
     })
 }
 
+/// The projection cache of a run: `dir`, or none with `--no-cache`.
+fn open_store(dir: &std::path::Path, no_cache: bool) -> crate::cache::Store {
+    if no_cache {
+        crate::cache::Store::disabled()
+    } else {
+        crate::cache::Store::open(dir, crate::cache::DEFAULT_MAX_BYTES)
+    }
+}
+
 /// Runs a parsed command line.
 ///
 /// # Errors
@@ -240,6 +253,7 @@ pub fn run(cli: Cli) -> Result<()> {
             out,
             quality,
             cache,
+            no_cache,
             seed,
         } => {
             let q = Quality::preset(&quality).ok_or_else(|| {
@@ -259,13 +273,9 @@ pub fn run(cli: Cli) -> Result<()> {
                 eprintln!("warning: {w}");
             }
             let (utc, local) = crate::site::parse_time(&time, scene.site.utc_offset_h)?;
-            let mut result = sequence::run_instant(&scene, utc, local, &spec, &q)?;
-            if cache.is_some() {
-                result
-                    .report
-                    .warnings
-                    .push("--cache given, but projection caching is not implemented yet".into());
-            }
+            let store = open_store(&cache, no_cache);
+            let result =
+                sequence::instant::run_instant_cached(&scene, utc, local, &spec, &q, &store)?;
             sequence::write_instant(&scene, &result, &out)?;
             for w in &result.report.warnings {
                 eprintln!("warning: {w}");

@@ -66,6 +66,9 @@ pub struct TransportParams {
     pub margin_m: f64,
     /// Largest mesh element outside the region of interest, m².
     pub far_element_area_m2: f64,
+    /// Target number of elements in the region of interest: when the region's area over
+    /// `element_area_m2` exceeds it, elements there are made larger.
+    pub max_rows: u64,
     /// Seed of the directions and rays.
     pub seed: u64,
 }
@@ -82,6 +85,7 @@ impl Default for TransportParams {
             max_sweeps: 1000,
             margin_m: 6.0,
             far_element_area_m2: 4.0,
+            max_rows: 20_000,
             seed: 0x5eed,
         }
     }
@@ -370,12 +374,22 @@ impl Transport {
             );
             ((a - m).max(lo), (b + m).min(hi))
         };
-        let mesh = Mesh::new(
-            scene,
-            params.element_area_m2,
-            params.far_element_area_m2,
-            region,
-        );
+        // Bound the unknowns (memory and time grow with rows × links): a large region
+        // gets coarser elements.
+        let area_in_region: f64 = scene
+            .triangles
+            .iter()
+            .filter(|t| {
+                let lo = t.v[0].min(t.v[1]).min(t.v[2]);
+                let hi = t.v[0].max(t.v[1]).max(t.v[2]);
+                lo.cmple(region.1).all() && hi.cmpge(region.0).all()
+            })
+            .map(|t| t.area())
+            .sum();
+        let element_area = params
+            .element_area_m2
+            .max(area_in_region / params.max_rows.max(1) as f64);
+        let mesh = Mesh::new(scene, element_area, params.far_element_area_m2, region);
         let parts_n = params.parts.max(2);
         let rho: Vec<Rgb> = mesh
             .elements

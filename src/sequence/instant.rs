@@ -460,6 +460,22 @@ pub fn run_instant(
     spec: &SkySpec,
     quality: &Quality,
 ) -> Result<InstantResult> {
+    let store = crate::cache::Store::disabled();
+    run_instant_cached(scene, instant_utc, local, spec, quality, &store)
+}
+
+/// [`run_instant`] with projections and sensor responses read from and written to `store`.
+///
+/// # Errors
+/// Bad time or sky parameters ([`Error::Input`]).
+pub fn run_instant_cached(
+    scene: &Scene,
+    instant_utc: DateTime<Utc>,
+    local: NaiveDateTime,
+    spec: &SkySpec,
+    quality: &Quality,
+    store: &crate::cache::Store,
+) -> Result<InstantResult> {
     let t0 = Instant::now();
     let mut report = Report {
         version: env!("CARGO_PKG_VERSION").into(),
@@ -491,7 +507,11 @@ pub fn run_instant(
     }
     report.sky = sky.description.clone();
     report.stage_seconds = times;
-    let mut result = run_sky(scene, &sky, quality, &mut report);
+    let dirs = Directions::new(scene, quality, store);
+    let coarse = Directions::new(scene, &quality.coarser(), store);
+    let mut result = run_sky_with(scene, &sky, &dirs, &coarse, &mut report);
+    result.report.cache = Some(store.stats());
+    result.report.warnings.extend(store.warnings());
     result.report.total_seconds = t0.elapsed().as_secs_f64();
     Ok(result)
 }

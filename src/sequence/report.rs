@@ -108,6 +108,9 @@ pub struct Report {
     /// The interreflection solve: lines, batches, stop reason, estimated error, energy
     /// balance; absent when the scene needed none.
     pub radiosity: Option<crate::radiosity::SolveReport>,
+    /// Projection cache counters (hits, misses, rebuilds, bytes mapped), when a run went
+    /// through a cache store.
+    pub cache: Option<crate::cache::CacheStats>,
     /// The global-line operator's build counters, when that solver ran.
     pub transport: Option<crate::radiosity::TransportStats>,
     /// The global-line solve (sweeps, iteration error), when that solver ran.

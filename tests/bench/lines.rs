@@ -168,8 +168,8 @@ fn bench(name: &str, scene: &Scene, stride: usize, paths: u64) {
     }
     for (dirs, res, area) in [
         (64u32, 512u32, 0.25),
+        (256, 256, 0.25),
         (256, 512, 0.25),
-        (256, 1024, 0.25),
         (1024, 256, 0.25),
         (1024, 512, 0.25),
         (4096, 256, 0.25),
@@ -247,6 +247,7 @@ fn main() {
     if std::env::args().any(|a| a == "--office-only") {
         return;
     }
+    // The default operator of the building (element size bounded by `max_rows`).
     bench(
         "multi-storey building 10k",
         &synthetic::multi_storey_building(10_000),
