@@ -114,6 +114,8 @@ pub const KIND_SKY_NODE: u8 = 0;
 pub const KIND_SUN: u8 = 1;
 /// Record kind: a node of the ground glow below the horizon ([`SkyNodeKey::id`]).
 pub const KIND_GROUND: u8 = 2;
+/// Record kind: a global-line interreflection operator (direction 0, resolution 0).
+pub const KIND_TRANSPORT: u8 = 3;
 // Kinds 3..=255 are free for later record types (global-line bundles, depth maps, …).
 
 /// Lossless 64-bit id of a sun-grid cell: spacing δ (µdeg) in the top 32 bits, the altitude

@@ -30,7 +30,9 @@ pub mod key;
 pub mod record;
 pub mod store;
 
-pub use key::{scene_hash, RecordKey, SceneHash, KIND_GROUND, KIND_SKY_NODE, KIND_SUN};
+pub use key::{
+    scene_hash, RecordKey, SceneHash, KIND_GROUND, KIND_SKY_NODE, KIND_SUN, KIND_TRANSPORT,
+};
 pub use record::{
     decode_direction, encode, encode_direction, Invalid, MappedRecord, Record, Section,
     FIRST_USER_TAG,

@@ -361,8 +361,9 @@ pub struct TransportSensor {
 
 impl Transport {
     /// Estimates the operator of `scene` and the gather of `sensors` with global lines.
-    pub fn build(scene: &Scene, sensors: &[Sensor], params: &TransportParams) -> Transport {
-        let t0 = Instant::now();
+    /// The mesh and per-row materials of `scene` for `params` (deterministic: the same
+    /// inputs give the same rows, which cached operators rely on).
+    fn setup(scene: &Scene, sensors: &[Sensor], params: &TransportParams) -> Transport {
         let (lo, hi) = scene.bounds();
         let region = if sensors.is_empty() || scene.triangles.is_empty() {
             (lo, hi)
@@ -390,7 +391,6 @@ impl Transport {
             .element_area_m2
             .max(area_in_region / params.max_rows.max(1) as f64);
         let mesh = Mesh::new(scene, element_area, params.far_element_area_m2, region);
-        let parts_n = params.parts.max(2);
         let rho: Vec<Rgb> = mesh
             .elements
             .iter()
@@ -414,6 +414,24 @@ impl Transport {
             coarse_rho[c as usize] = rho[r];
             coarse_area[c as usize] += mesh.area[r];
         }
+        Transport {
+            mesh,
+            parts: Vec::new(),
+            rho,
+            emit,
+            coarse_rho,
+            coarse_area,
+            params: *params,
+            stats: TransportStats::default(),
+        }
+    }
+
+    /// Estimates the operator of `scene` and the gather of `sensors` with global lines.
+    pub fn build(scene: &Scene, sensors: &[Sensor], params: &TransportParams) -> Transport {
+        let t0 = Instant::now();
+        let mut t = Transport::setup(scene, sensors, params);
+        let parts_n = params.parts.max(2);
+        let mesh = &t.mesh;
         let pscene = ProjectionScene::new(scene);
         let tracer = Tracer::new(scene);
         let per = params.directions.div_ceil(parts_n).max(1);
@@ -426,9 +444,9 @@ impl Transport {
             .into_par_iter()
             .map(|p| {
                 let seed = mix64(params.seed ^ mix64(p as u64 + 1));
-                let (f, lines) = operator(&pscene, &mesh, per, params.resolution, seed);
-                let g = gather(&tracer, &mesh, sensors, gather_per, seed);
-                let f_coarse = coarse_operator(&f, &mesh);
+                let (f, lines) = operator(&pscene, mesh, per, params.resolution, seed);
+                let g = gather(&tracer, mesh, sensors, gather_per, seed);
+                let f_coarse = coarse_operator(&f, mesh);
                 let g_coarse = g.map_cols(&mesh.coarse_of);
                 (
                     Part {
@@ -449,16 +467,76 @@ impl Transport {
         }
         stats.sensor_rays = gather_per as u64 * sensors.len() as u64 * parts_n as u64;
         stats.seconds = t0.elapsed().as_secs_f64();
-        Transport {
-            mesh,
-            parts,
-            rho,
-            emit,
-            coarse_rho,
-            coarse_area,
-            params: *params,
-            stats,
+        t.parts = parts;
+        t.stats = stats;
+        t
+    }
+
+    /// The operator as flat arrays, for storage: per part, four sparse matrices (fine
+    /// operator, fine gather, coarse operator, coarse gather), each as (row offsets,
+    /// columns, values RGB).
+    pub fn export(&self) -> Vec<[(&[u32], &[u32], &[[f32; 3]]); 4]> {
+        self.parts
+            .iter()
+            .map(|p| {
+                [&p.f, &p.g, &p.f_coarse, &p.g_coarse]
+                    .map(|m| (&m.offsets[..], &m.cols[..], &m.vals[..]))
+            })
+            .collect()
+    }
+
+    /// Rebuilds an operator from [`Transport::export`]ed arrays for the same scene, sensors
+    /// and parameters; `None` when the arrays do not fit (wrong sizes or indices), so a
+    /// stale or foreign record is never used.
+    pub fn import(
+        scene: &Scene,
+        sensors: &[Sensor],
+        params: &TransportParams,
+        parts: &[[(Vec<u32>, Vec<u32>, Vec<[f32; 3]>); 4]],
+        stats: TransportStats,
+    ) -> Option<Transport> {
+        let mut t = Transport::setup(scene, sensors, params);
+        if parts.len() != params.parts.max(2) as usize {
+            return None;
         }
+        let rows = t.mesh.elements.len();
+        let coarse = t.mesh.coarse_rows;
+        // (rows, columns) of each matrix.
+        let shape = [
+            (rows, rows),
+            (sensors.len(), rows),
+            (coarse, coarse),
+            (sensors.len(), coarse),
+        ];
+        for p in parts {
+            let mut m = p.iter().zip(shape).map(|((o, c, v), (nr, nc))| {
+                let ok = o.len() == nr + 1
+                    && o.first() == Some(&0)
+                    && o.windows(2).all(|w| w[0] <= w[1])
+                    && *o.last().unwrap_or(&1) as usize == c.len()
+                    && c.len() == v.len()
+                    && c.iter().all(|&j| (j as usize) < nc)
+                    && v.iter().flatten().all(|x| x.is_finite());
+                ok.then(|| Sparse {
+                    offsets: o.clone(),
+                    cols: c.clone(),
+                    vals: v.clone(),
+                })
+            });
+            let (f, g, f_coarse, g_coarse) = (m.next()??, m.next()??, m.next()??, m.next()??);
+            t.parts.push(Part {
+                f,
+                g,
+                f_coarse,
+                g_coarse,
+            });
+        }
+        t.stats = TransportStats {
+            rows,
+            seconds: 0.0,
+            ..stats
+        };
+        Some(t)
     }
 
     /// Solves for the mesh direct irradiance `direct` (RGB W/m² per row, see

@@ -83,6 +83,11 @@ impl<'a> Directions<'a> {
         }
     }
 
+    /// The cache store the directions go through.
+    pub fn store(&self) -> &Store {
+        self.store
+    }
+
     /// The scene.
     pub fn scene(&self) -> &Scene {
         self.scene

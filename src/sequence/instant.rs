@@ -289,9 +289,12 @@ pub fn run_sky_with(
     let mut solution = None;
     let mut global = None;
     if needs_radiosity && quality.solver == Solver::GlobalLines {
-        let t = times.time("transport_build", || {
-            Transport::build(scene, &scene.sensors, &quality.transport)
+        let (t, cached) = times.time("transport_build", || {
+            super::operator::transport(scene, &quality.transport, dirs.store())
         });
+        if cached {
+            counts.operators_reused += 1;
+        }
         let total: Vec<crate::photometry::Rgb> = direct
             .sun
             .iter()

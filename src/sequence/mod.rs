@@ -4,6 +4,7 @@
 pub mod config;
 pub mod directions;
 pub mod instant;
+pub mod operator;
 pub mod report;
 
 pub use config::{Quality, SkySpec};

@@ -72,6 +72,8 @@ pub struct Counts {
     pub sensor_rays: u64,
     /// Zero-area input triangles dropped.
     pub degenerate_triangles_dropped: usize,
+    /// Interreflection operators read from the cache instead of built.
+    pub operators_reused: usize,
 }
 
 /// Everything `report.json` says about a run.
