@@ -294,6 +294,11 @@ struct Part {
     g_coarse: Sparse,
 }
 
+/// One sparse matrix as flat arrays: row offsets, columns, values (RGB).
+pub type SparseArrays = (Vec<u32>, Vec<u32>, Vec<[f32; 3]>);
+/// Borrowed [`SparseArrays`].
+pub type SparseSlices<'a> = (&'a [u32], &'a [u32], &'a [[f32; 3]]);
+
 /// Counters of an operator build.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct TransportStats {
@@ -475,7 +480,7 @@ impl Transport {
     /// The operator as flat arrays, for storage: per part, four sparse matrices (fine
     /// operator, fine gather, coarse operator, coarse gather), each as (row offsets,
     /// columns, values RGB).
-    pub fn export(&self) -> Vec<[(&[u32], &[u32], &[[f32; 3]]); 4]> {
+    pub fn export(&self) -> Vec<[SparseSlices<'_>; 4]> {
         self.parts
             .iter()
             .map(|p| {
@@ -492,7 +497,7 @@ impl Transport {
         scene: &Scene,
         sensors: &[Sensor],
         params: &TransportParams,
-        parts: &[[(Vec<u32>, Vec<u32>, Vec<[f32; 3]>); 4]],
+        parts: &[[SparseArrays; 4]],
         stats: TransportStats,
     ) -> Option<Transport> {
         let mut t = Transport::setup(scene, sensors, params);

@@ -5,6 +5,7 @@
 
 use crate::cache::{self, RecordKey, Section, Store, FIRST_USER_TAG, KIND_TRANSPORT};
 use crate::projection::ProjectionParams;
+use crate::radiosity::transport::SparseArrays;
 use crate::radiosity::{Transport, TransportParams, TransportStats};
 use crate::scene::Scene;
 
@@ -65,7 +66,7 @@ fn decode(scene: &Scene, params: &TransportParams, r: &cache::MappedRecord) -> O
     let n = params.parts.max(2) as usize;
     let mut parts = Vec::with_capacity(n);
     for p in 0..n {
-        let mut mats: [(Vec<u32>, Vec<u32>, Vec<[f32; 3]>); 4] = Default::default();
+        let mut mats: [SparseArrays; 4] = Default::default();
         for (m, slot) in mats.iter_mut().enumerate() {
             let tag = TAG_PARTS + 16 * p as u32 + 4 * m as u32;
             *slot = (
