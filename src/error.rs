@@ -34,6 +34,9 @@ pub enum Error {
     /// A broken invariant: a bug in daystep.
     #[error("internal error: {0}")]
     Internal(String),
+    /// The user stopped a long run (Ctrl-C); what was finished is kept.
+    #[error("interrupted: finished work is kept; run the same command again to continue")]
+    Interrupted,
 }
 
 /// Result alias used across the crate.
@@ -79,6 +82,7 @@ impl Error {
         use std::io::ErrorKind::{NotFound, PermissionDenied};
         match self {
             Error::Input { .. } => 1,
+            Error::Interrupted => 130,
             // A file the user named that is missing or unreadable is bad input too.
             Error::Io { source, .. } if matches!(source.kind(), NotFound | PermissionDenied) => 1,
             _ => 2,

@@ -4,6 +4,7 @@
 use crate::error::{Error, Result};
 use crate::scene::Scene;
 use crate::sequence::{self, Quality, SkySpec};
+use chrono::Datelike;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 
@@ -80,12 +81,118 @@ pub enum Command {
         #[arg(long)]
         seed: Option<u64>,
     },
+    /// A time series over a weather file (EPW or WEA): illuminance.csv, direct_sun.csv,
+    /// metrics.csv, summary.json, report.json.
+    Annual(AnnualArgs),
+    /// Assembles the output folders of `annual --shard k/n` runs into one run's files.
+    Merge {
+        /// Shard output folders, any order.
+        #[arg(required = true)]
+        parts: Vec<PathBuf>,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+        /// Timestep of the runs, minutes (the weather file's interval).
+        #[arg(long, default_value_t = 60)]
+        step: u32,
+        /// Metric thresholds.
+        #[command(flatten)]
+        metrics: MetricArgs,
+    },
     /// Inspect or maintain a projection cache folder.
     Cache {
         /// What to do with the cache.
         #[command(subcommand)]
         action: CacheAction,
     },
+}
+
+/// Arguments of `daystep annual`.
+#[derive(Args, Debug)]
+pub struct AnnualArgs {
+    /// The scene file (scene.toml).
+    pub scene: PathBuf,
+    /// Weather file: EnergyPlus EPW or Radiance/DAYSIM WEA.
+    #[arg(long)]
+    pub weather: PathBuf,
+    /// Output folder; a rerun with the same folder continues an interrupted run.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Quality preset: draft, default, high, reference.
+    #[arg(long, default_value = "default")]
+    pub quality: String,
+    /// Projection cache folder.
+    #[arg(long, default_value = "cache")]
+    pub cache: PathBuf,
+    /// Run without the projection cache.
+    #[arg(long)]
+    pub no_cache: bool,
+    /// Compute shard k of n (every n-th day); `daystep merge` assembles the shards.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
+    /// First day, YYYY-MM-DD (month and day are matched against the weather file's dates).
+    #[arg(long)]
+    pub start: Option<String>,
+    /// Last day, YYYY-MM-DD.
+    #[arg(long)]
+    pub end: Option<String>,
+    /// Timestep, minutes: must equal the weather file's interval (sub-hourly interpolation
+    /// is not implemented yet).
+    #[arg(long)]
+    pub step: Option<u32>,
+    /// Also write a Radiance/DAYSIM-style illuminance.ill.
+    #[arg(long)]
+    pub ill: bool,
+    /// Seed of the Monte Carlo parts (results are a pure function of it).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Metric thresholds.
+    #[command(flatten)]
+    pub metrics: MetricArgs,
+}
+
+/// Annual-metric thresholds (honeybee-radiance-postprocess defaults).
+#[derive(Args, Debug)]
+pub struct MetricArgs {
+    /// First occupied hour (hour starting at), local standard time.
+    #[arg(long, default_value_t = 8)]
+    pub occupancy_start: u32,
+    /// Last occupied hour (inclusive; 17 = the hour 17:00–18:00).
+    #[arg(long, default_value_t = 17)]
+    pub occupancy_end: u32,
+    /// Daylight autonomy threshold, lux (DA counts ≥).
+    #[arg(long, default_value_t = 300.0)]
+    pub da_threshold: f64,
+    /// UDI lower bound, lux.
+    #[arg(long, default_value_t = 100.0)]
+    pub udi_min: f64,
+    /// UDI upper bound, lux.
+    #[arg(long, default_value_t = 3000.0)]
+    pub udi_max: f64,
+    /// sDA: fraction of occupied hours a sensor's DA must reach.
+    #[arg(long, default_value_t = 0.5)]
+    pub sda_fraction: f64,
+    /// ASE: direct-sun threshold, lux (counts >).
+    #[arg(long, default_value_t = 1000.0)]
+    pub ase_threshold: f64,
+    /// ASE: hours above the threshold that make a sensor fail (≥).
+    #[arg(long, default_value_t = 250.0)]
+    pub ase_hours: f64,
+}
+
+impl MetricArgs {
+    fn params(&self) -> crate::metrics::MetricParams {
+        crate::metrics::MetricParams {
+            occupancy_start_hour: self.occupancy_start,
+            occupancy_end_hour: self.occupancy_end,
+            da_threshold_lux: self.da_threshold,
+            udi_min_lux: self.udi_min,
+            udi_max_lux: self.udi_max,
+            sda_da_fraction: self.sda_fraction,
+            ase_threshold_lux: self.ase_threshold,
+            ase_hours: self.ase_hours,
+        }
+    }
 }
 
 /// The cache folder argument of `daystep cache …`.
@@ -234,6 +341,153 @@ fn open_store(dir: &std::path::Path, no_cache: bool) -> crate::cache::Store {
     }
 }
 
+fn parse_date(flag: &str, v: &str) -> Result<chrono::NaiveDate> {
+    chrono::NaiveDate::parse_from_str(v, "%Y-%m-%d")
+        .map_err(|_| Error::arg(flag, v, "expected a date YYYY-MM-DD"))
+}
+
+fn run_annual(a: AnnualArgs) -> Result<()> {
+    let q = Quality::preset(&a.quality).ok_or_else(|| {
+        Error::arg(
+            "--quality",
+            &a.quality,
+            "expected draft, default, high or reference",
+        )
+    })?;
+    let q = match a.seed {
+        Some(s) => q.with_seed(s),
+        None => q,
+    };
+    let shard = match &a.shard {
+        None => (1, 1),
+        Some(v) => {
+            let bad = || Error::arg("--shard", v, "expected K/N with 1 <= K <= N");
+            let (k, n) = v.split_once('/').ok_or_else(bad)?;
+            let (k, n): (u32, u32) = (k.parse().map_err(|_| bad())?, n.parse().map_err(|_| bad())?);
+            if k == 0 || n == 0 || k > n {
+                return Err(bad());
+            }
+            (k, n)
+        }
+    };
+    let scene = Scene::load(&a.scene)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    let mut weather = crate::weather::read_weather(&a.weather)?;
+    if let Some(step) = a.step {
+        if step != weather.interval_minutes {
+            return Err(Error::arg(
+                "--step",
+                step,
+                format!(
+                    "must equal the weather file's interval ({} min): sub-hourly interpolation is not implemented yet",
+                    weather.interval_minutes
+                ),
+            ));
+        }
+    }
+    let ws = &weather.site;
+    if (ws.latitude - scene.site.latitude).abs() > 0.1
+        || (ws.longitude - scene.site.longitude).abs() > 0.1
+    {
+        weather.warnings.push(format!(
+            "the weather file's site ({:.2}°, {:.2}°) differs from the scene file's ({:.2}°, {:.2}°) by more than 0.1°: using the scene file's",
+            ws.latitude, ws.longitude, scene.site.latitude, scene.site.longitude
+        ));
+    }
+    // Dates are matched by month and day in the year the weather file's times use.
+    let year = weather.records.first().map_or(2021, |r| r.time.year());
+    let in_year = |d: chrono::NaiveDate| {
+        chrono::NaiveDate::from_ymd_opt(year, d.month(), d.day()).unwrap_or(d)
+    };
+    let opts = sequence::annual::AnnualOptions {
+        start: a
+            .start
+            .as_deref()
+            .map(|v| parse_date("--start", v))
+            .transpose()?
+            .map(in_year),
+        end: a
+            .end
+            .as_deref()
+            .map(|v| parse_date("--end", v))
+            .transpose()?
+            .map(in_year),
+        shard,
+        metrics: a.metrics.params(),
+        ill: a.ill,
+    };
+    opts.metrics.validate()?;
+    for w in &weather.warnings {
+        eprintln!("warning: {w}");
+    }
+    let store = open_store(&a.cache, a.no_cache);
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        // A second Ctrl-C while the batch finishes kills the process as usual.
+        let _ = ctrlc::set_handler(move || {
+            if stop.swap(true, std::sync::atomic::Ordering::SeqCst) {
+                std::process::exit(130);
+            }
+            eprintln!("\nstopping after the current days (Ctrl-C again to abort)…");
+        });
+    }
+    let bar = if std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+        let b = indicatif::ProgressBar::new(0);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} steps {per_sec} ETA {eta}",
+            )
+            .expect("valid template"),
+        );
+        Some(b)
+    } else {
+        None
+    };
+    let progress = |done: usize, total: usize| {
+        if let Some(b) = &bar {
+            b.set_length(total as u64);
+            b.set_position(done as u64);
+        }
+    };
+    let control = sequence::annual::RunControl {
+        stop: &stop,
+        progress: &progress,
+    };
+    let r = sequence::annual::run_annual(&scene, &weather, &q, &store, &a.out, &opts, &control)?;
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    for w in &r.warnings {
+        eprintln!("warning: {w}");
+    }
+    if r.interrupted {
+        eprintln!(
+            "daystep annual: interrupted after {} of {} steps; finished days are kept in {}. To continue, run the same command again.",
+            r.resumed + r.computed,
+            r.steps,
+            a.out.display()
+        );
+        return Err(Error::Interrupted);
+    }
+    eprintln!(
+        "daystep annual: {} steps ({} computed, {} resumed; {} night, {} missing skipped), {} directions built, {} from cache, {:.1} s; median stated error {:.2} %; wrote {}",
+        r.steps,
+        r.computed,
+        r.resumed,
+        r.night,
+        r.missing,
+        r.directions.built,
+        r.directions.from_cache,
+        r.total_seconds,
+        100.0 * r.median_relative_err,
+        a.out.display()
+    );
+    Ok(())
+}
+
 /// Runs a parsed command line.
 ///
 /// # Errors
@@ -241,6 +495,17 @@ fn open_store(dir: &std::path::Path, no_cache: bool) -> crate::cache::Store {
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Cache { action } => run_cache(action),
+        Command::Annual(a) => run_annual(a),
+        Command::Merge {
+            parts,
+            out,
+            step,
+            metrics,
+        } => {
+            sequence::annual::merge(&parts, &out, step, &metrics.params())?;
+            eprintln!("daystep merge: {} shards → {}", parts.len(), out.display());
+            Ok(())
+        }
         Command::Instant {
             scene,
             time,

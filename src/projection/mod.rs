@@ -45,17 +45,18 @@ impl Default for ProjectionParams {
 }
 
 impl ProjectionParams {
-    /// Resolution for a source with irradiance `e` when the brightest has `e_max`: the pixel
-    /// count is proportional to the irradiance (§5.1), rounded up to a power of two (so the
-    /// same direction under another sky usually asks for the same projection, which the
-    /// cache can then reuse), clamped to the bounds.
-    pub fn resolution_for(&self, e: f64, e_max: f64) -> u32 {
-        if e_max <= 0.0 || e <= 0.0 {
-            return self.min_resolution;
+    /// LDI resolution for a source: the sun at `max_resolution`, every sky and ground node
+    /// at half of it (at least `min_resolution`). The paper sizes each LDI by the source's
+    /// share of the irradiance (§5.1); a fixed size per kind instead makes a direction's
+    /// projection the same under every sky, so a year of skies projects each node once
+    /// and the cache can keep it (README design notes). Sensor values do not depend on it
+    /// (they are ray cast); the element weights that feed interreflection do, slightly.
+    pub fn resolution_for(&self, is_sun: bool) -> u32 {
+        if is_sun {
+            self.max_resolution
+        } else {
+            (self.max_resolution / 2).max(self.min_resolution)
         }
-        let r = self.max_resolution as f64 * (e / e_max).sqrt();
-        let r = (r.ceil().max(1.0) as u32).next_power_of_two();
-        r.clamp(self.min_resolution, self.max_resolution)
     }
 }
 

@@ -7,7 +7,7 @@
 
 use super::config::Quality;
 use crate::cache::{self, MappedRecord, RecordKey, SceneHash, Section, Store, FIRST_USER_TAG};
-use crate::photometry::{grey, Rgb};
+use crate::photometry::Rgb;
 use crate::projection::{self, DirectionRecord, ProjectionScene};
 use crate::scene::Scene;
 use crate::sensors::{node_response, sun_response, NodeResponse, Visibility};
@@ -119,20 +119,14 @@ impl<'a> Directions<'a> {
         }
     }
 
-    /// The data of every source (in order), at the resolution its share of the brightest
-    /// source's irradiance asks for; missing directions are computed in parallel.
+    /// The data of every source (in order), at its kind's LDI resolution
+    /// ([`crate::projection::ProjectionParams::resolution_for`]); missing directions are
+    /// computed in parallel.
     pub fn get_all(&self, sources: &[Source]) -> Vec<Arc<DirectionData>> {
-        let e_max = sources
-            .iter()
-            .map(|s| grey(s.normal_irradiance))
-            .fold(0.0, f64::max);
         sources
             .par_iter()
             .map(|s| {
-                let res = self
-                    .quality
-                    .projection
-                    .resolution_for(grey(s.normal_irradiance), e_max);
+                let res = self.quality.projection.resolution_for(s.is_sun());
                 self.get(s, res)
             })
             .collect()

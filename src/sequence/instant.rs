@@ -6,7 +6,7 @@ use super::directions::{DirectionData, Directions};
 use super::report::{Counts, Report, StageTimes, SunReport};
 use crate::error::{Error, Result};
 use crate::hierarchy::Hierarchy;
-use crate::photometry::{grey, lux};
+use crate::photometry::lux;
 use crate::projection::{self, DirectionRecord, ProjectionScene};
 use crate::radiosity::{self, RadiosityState, Tracer, Transport, TransportState};
 use crate::scene::Scene;
@@ -96,7 +96,7 @@ pub fn build_sky(
     }
 }
 
-fn sources_for(sky: &Sky, q: &Quality) -> (Vec<Source>, usize, Option<f64>) {
+pub(crate) fn sources_for(sky: &Sky, q: &Quality) -> (Vec<Source>, usize, Option<f64>) {
     let s = sources::sky_sources(sky, &q.sky);
     let mut list = s.sources;
     let mut err = None;
@@ -127,16 +127,10 @@ pub fn project_sources(
         return vec![DirectionRecord::default(); sources.len()];
     }
     let pscene = ProjectionScene::new(scene);
-    let e_max = sources
-        .iter()
-        .map(|s| grey(s.normal_irradiance))
-        .fold(0.0, f64::max);
     sources
         .par_iter()
         .map(|s| {
-            let res = quality
-                .projection
-                .resolution_for(grey(s.normal_irradiance), e_max);
+            let res = quality.projection.resolution_for(s.is_sun());
             projection::project(&pscene, s.direction, res, &quality.projection)
         })
         .collect()

@@ -1,6 +1,7 @@
 //! L8 orchestration: the one place that knows the whole order of the pipeline. A single
 //! instant is a sequence of one step.
 
+pub mod annual;
 pub mod config;
 pub mod directions;
 pub mod instant;
