@@ -1,0 +1,214 @@
+//! `daystep annual` end to end on the sample office (six sensors, draft quality): an
+//! interrupted and resumed run (and one cut mid-line) writes the same bytes as an
+//! uninterrupted one; three shards merged equal one run; a day's steps agree with
+//! independent cold instants within their stated errors.
+
+use daystep::cache::{Store, DEFAULT_MAX_BYTES};
+use daystep::scene::Scene;
+use daystep::sequence::annual::{merge, run_annual, AnnualOptions, RunControl};
+use daystep::sequence::instant::run_instant_cached;
+use daystep::sequence::{Quality, SkySpec};
+use daystep::weather::read_weather;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// The office with every 33rd sensor (5 sensors), written into `dir`.
+fn small_office(dir: &Path) -> PathBuf {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office");
+    for f in ["scene.toml", "office.obj", "office.mtl", "weather.epw"] {
+        std::fs::copy(src.join(f), dir.join(f)).unwrap();
+    }
+    let pts = std::fs::read_to_string(src.join("office.pts")).unwrap();
+    let few: String = pts.lines().step_by(33).map(|l| format!("{l}\n")).collect();
+    std::fs::write(dir.join("office.pts"), few).unwrap();
+    dir.join("scene.toml")
+}
+
+fn date(s: &str) -> Option<chrono::NaiveDate> {
+    Some(chrono::NaiveDate::parse_from_str(s, "%Y-%m-%d").unwrap())
+}
+
+fn opts(days: (&str, &str), shard: (u32, u32)) -> AnnualOptions {
+    AnnualOptions {
+        start: date(days.0),
+        end: date(days.1),
+        shard,
+        ..AnnualOptions::default()
+    }
+}
+
+fn read(dir: &Path, f: &str) -> Vec<u8> {
+    std::fs::read(dir.join(f)).unwrap_or_else(|e| panic!("{}: {e}", dir.join(f).display()))
+}
+
+const OUTPUTS: [&str; 4] = [
+    "illuminance.csv",
+    "direct_sun.csv",
+    "metrics.csv",
+    "summary.json",
+];
+
+#[test]
+fn resumed_and_sharded_runs_equal_one_run() {
+    let d = tempfile::tempdir().unwrap();
+    let scene = Scene::load(&small_office(d.path())).unwrap();
+    let weather = read_weather(&d.path().join("weather.epw")).unwrap();
+    let q = Quality::preset("draft").unwrap();
+    let store = Store::open(&d.path().join("cache"), DEFAULT_MAX_BYTES);
+    // The weather file's times are in 2021 (a TMY file without 29 February).
+    let days = ("2021-06-01", "2021-06-10");
+    let go = AtomicBool::new(false);
+    let quiet = |_: usize, _: usize| {};
+    let control = RunControl {
+        stop: &go,
+        progress: &quiet,
+    };
+    let one = d.path().join("one");
+    let r = run_annual(
+        &scene,
+        &weather,
+        &q,
+        &store,
+        &one,
+        &opts(days, (1, 1)),
+        &control,
+    )
+    .unwrap();
+    assert_eq!(r.steps, 240);
+    assert!(r.night > 0 && r.sun_steps > 0);
+
+    // Interrupted after the first batch of days (the stop flag, as Ctrl-C sets it) ...
+    let stopped = d.path().join("stopped");
+    let stop = AtomicBool::new(false);
+    let stop_after_first = |done: usize, _: usize| {
+        if done > 0 {
+            stop.store(true, Ordering::SeqCst);
+        }
+    };
+    let c = RunControl {
+        stop: &stop,
+        progress: &stop_after_first,
+    };
+    let r1 = run_annual(
+        &scene,
+        &weather,
+        &q,
+        &store,
+        &stopped,
+        &opts(days, (1, 1)),
+        &c,
+    )
+    .unwrap();
+    assert!(r1.interrupted && r1.computed < 240, "{r1:?}");
+    assert!(!stopped.join("illuminance.csv").exists());
+    // ... and killed mid-line: cut the partial file inside its last row.
+    let partial = stopped.join("illuminance.csv.partial");
+    let bytes = std::fs::read(&partial).unwrap();
+    std::fs::write(&partial, &bytes[..bytes.len() - 7]).unwrap();
+    let r2 = run_annual(
+        &scene,
+        &weather,
+        &q,
+        &store,
+        &stopped,
+        &opts(days, (1, 1)),
+        &control,
+    )
+    .unwrap();
+    assert!(
+        r2.resumed > 0 && r2.resumed < 240 && !r2.interrupted,
+        "{r2:?}"
+    );
+    for f in OUTPUTS {
+        assert_eq!(read(&one, f), read(&stopped, f), "{f} after resume");
+    }
+
+    // Three shards, merged.
+    let shards: Vec<PathBuf> = (1..=3)
+        .map(|k| {
+            let out = d.path().join(format!("shard{k}"));
+            run_annual(
+                &scene,
+                &weather,
+                &q,
+                &store,
+                &out,
+                &opts(days, (k, 3)),
+                &control,
+            )
+            .unwrap();
+            out
+        })
+        .collect();
+    let merged = d.path().join("merged");
+    merge(&shards, &merged, 60, &Default::default()).unwrap();
+    for f in OUTPUTS {
+        assert_eq!(read(&one, f), read(&merged, f), "{f} after merge");
+    }
+}
+
+#[test]
+fn a_day_agrees_with_independent_cold_instants() {
+    let d = tempfile::tempdir().unwrap();
+    let scene = Scene::load(&small_office(d.path())).unwrap();
+    let weather = read_weather(&d.path().join("weather.epw")).unwrap();
+    let q = Quality::preset("draft").unwrap();
+    let store = Store::open(&d.path().join("cache"), DEFAULT_MAX_BYTES);
+    let out = d.path().join("day");
+    let go = AtomicBool::new(false);
+    let quiet = |_: usize, _: usize| {};
+    let control = RunControl {
+        stop: &go,
+        progress: &quiet,
+    };
+    let days = ("2021-06-21", "2021-06-21");
+    run_annual(
+        &scene,
+        &weather,
+        &q,
+        &store,
+        &out,
+        &opts(days, (1, 1)),
+        &control,
+    )
+    .unwrap();
+    let text = std::fs::read_to_string(out.join("illuminance.csv")).unwrap();
+    // Independent instants: another seed (other line directions and sensor rays).
+    let qi = q.with_seed(4242);
+    let (mut compared, mut within) = (0, 0);
+    for line in text.lines().skip(1) {
+        let mut f = line.split(',');
+        let time = f.next().unwrap();
+        let values: Vec<f64> = f.map(|v| v.parse().unwrap()).collect();
+        let rec = weather
+            .records
+            .iter()
+            .find(|r| daystep::export::format_time(r.time) == time)
+            .unwrap();
+        if rec.dni + rec.dhi <= 0.0 {
+            continue;
+        }
+        let utc = (rec.time - chrono::TimeDelta::hours(scene.site.utc_offset_h as i64)).and_utc();
+        let spec = SkySpec::Perez {
+            dni: rec.dni,
+            dhi: rec.dhi,
+            dew_point_c: rec.dew_point_c,
+        };
+        let r = run_instant_cached(&scene, utc, rec.time, &spec, &qi, &store).unwrap();
+        for (a, s) in values.iter().zip(&r.sensors) {
+            if s.lux < 10.0 {
+                continue;
+            }
+            compared += 1;
+            // The instant's stated error (noise + discretisation) covers both solves'
+            // noise at about 1σ each: allow twice it.
+            within += usize::from((a - s.lux).abs() <= 2.0 * s.lux_err);
+        }
+    }
+    eprintln!("day vs cold instants: {within}/{compared} within 2 × lux_err");
+    assert!(compared >= 40, "{compared}");
+    assert!(
+        within as f64 >= 0.9 * compared as f64,
+        "{within}/{compared}"
+    );
+}
