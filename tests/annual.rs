@@ -41,6 +41,14 @@ fn read(dir: &Path, f: &str) -> Vec<u8> {
     std::fs::read(dir.join(f)).unwrap_or_else(|e| panic!("{}: {e}", dir.join(f).display()))
 }
 
+/// The office, its weather, the draft preset and a cache, all in `dir`.
+fn setup(dir: &Path) -> (Scene, daystep::weather::Weather, Quality, Store) {
+    let scene = Scene::load(&small_office(dir)).unwrap();
+    let weather = read_weather(&dir.join("weather.epw")).unwrap();
+    let store = Store::open(&dir.join("cache"), DEFAULT_MAX_BYTES);
+    (scene, weather, Quality::preset("draft").unwrap(), store)
+}
+
 const OUTPUTS: [&str; 4] = [
     "illuminance.csv",
     "direct_sun.csv",
@@ -51,10 +59,7 @@ const OUTPUTS: [&str; 4] = [
 #[test]
 fn resumed_and_sharded_runs_equal_one_run() {
     let d = tempfile::tempdir().unwrap();
-    let scene = Scene::load(&small_office(d.path())).unwrap();
-    let weather = read_weather(&d.path().join("weather.epw")).unwrap();
-    let q = Quality::preset("draft").unwrap();
-    let store = Store::open(&d.path().join("cache"), DEFAULT_MAX_BYTES);
+    let (scene, weather, q, store) = setup(d.path());
     // The weather file's times are in 2021 (a TMY file without 29 February).
     let days = ("2021-06-01", "2021-06-10");
     let go = AtomicBool::new(false);
@@ -150,10 +155,7 @@ fn resumed_and_sharded_runs_equal_one_run() {
 #[test]
 fn a_day_agrees_with_independent_cold_instants() {
     let d = tempfile::tempdir().unwrap();
-    let scene = Scene::load(&small_office(d.path())).unwrap();
-    let weather = read_weather(&d.path().join("weather.epw")).unwrap();
-    let q = Quality::preset("draft").unwrap();
-    let store = Store::open(&d.path().join("cache"), DEFAULT_MAX_BYTES);
+    let (scene, weather, q, store) = setup(d.path());
     let out = d.path().join("day");
     let go = AtomicBool::new(false);
     let quiet = |_: usize, _: usize| {};

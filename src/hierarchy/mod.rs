@@ -65,6 +65,23 @@ pub fn split(v: [DVec3; 3]) -> [[DVec3; 3]; 4] {
     ]
 }
 
+/// Picks the child (split order) containing the point with barycentrics `b` and rewrites
+/// `b` to the child's barycentrics (see [`split`]).
+pub fn child_of(b: &mut [f64; 3]) -> u8 {
+    let [b0, b1, b2] = *b;
+    let (k, nb) = if b0 >= 0.5 {
+        (0, [2.0 * b0 - 1.0, 2.0 * b1, 2.0 * b2])
+    } else if b1 >= 0.5 {
+        (1, [2.0 * b0, 2.0 * b1 - 1.0, 2.0 * b2])
+    } else if b2 >= 0.5 {
+        (2, [2.0 * b0, 2.0 * b1, 2.0 * b2 - 1.0])
+    } else {
+        (3, [1.0 - 2.0 * b2, 1.0 - 2.0 * b0, 1.0 - 2.0 * b1])
+    };
+    *b = nb.map(|x| x.clamp(0.0, 1.0));
+    k
+}
+
 /// One element of the arena.
 #[derive(Clone, Debug)]
 pub struct Element {

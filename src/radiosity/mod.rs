@@ -391,22 +391,7 @@ pub(crate) fn mean_var(sum: Rgb, sum2: Rgb, m: u32) -> Rgb {
     ((sum2 - mean * sum) / (n - 1.0) / n).max(Rgb::ZERO)
 }
 
-/// Picks the child (split order) containing the point with barycentrics `b` and rewrites
-/// `b` to the child's barycentrics (see [`crate::hierarchy::split`]).
-pub(crate) fn child_of(b: &mut [f64; 3]) -> u8 {
-    let [b0, b1, b2] = *b;
-    let (k, nb) = if b0 >= 0.5 {
-        (0, [2.0 * b0 - 1.0, 2.0 * b1, 2.0 * b2])
-    } else if b1 >= 0.5 {
-        (1, [2.0 * b0, 2.0 * b1 - 1.0, 2.0 * b2])
-    } else if b2 >= 0.5 {
-        (2, [2.0 * b0, 2.0 * b1, 2.0 * b2 - 1.0])
-    } else {
-        (3, [1.0 - 2.0 * b2, 1.0 - 2.0 * b0, 1.0 - 2.0 * b1])
-    };
-    *b = nb.map(|x| x.clamp(0.0, 1.0));
-    k
-}
+pub(crate) use crate::hierarchy::child_of;
 
 /// Per-channel square root of a variance (negative rounding noise → 0).
 pub(crate) fn sqrt3(v: Rgb) -> Rgb {

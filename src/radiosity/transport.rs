@@ -140,20 +140,10 @@ impl Sparse {
         let mut entries = Vec::new();
         for r in 0..self.rows() {
             let (a, b) = (self.offsets[r] as usize, self.offsets[r + 1] as usize);
-            let mut row: Vec<(u32, [f32; 3])> = (a..b)
+            let row: Vec<(u32, [f32; 3])> = (a..b)
                 .map(|k| (map[self.cols[k] as usize], self.vals[k]))
                 .collect();
-            row.sort_by_key(|e| e.0);
-            let mut k = 0;
-            while k < row.len() {
-                let (c, mut v) = row[k];
-                k += 1;
-                while k < row.len() && row[k].0 == c {
-                    for (a, b) in v.iter_mut().zip(row[k].1) {
-                        *a += b;
-                    }
-                    k += 1;
-                }
+            for (c, v) in merge_columns(row) {
                 entries.push((r as u32, c, v));
             }
         }
@@ -724,6 +714,23 @@ fn gauss_seidel(
     (max_sweeps, err)
 }
 
+/// Sorts one row's (column, value) entries and sums the values of equal columns.
+fn merge_columns<T: Copy + std::ops::AddAssign>(mut row: Vec<(u32, [T; 3])>) -> Vec<(u32, [T; 3])> {
+    row.sort_by_key(|e| e.0);
+    let mut out: Vec<(u32, [T; 3])> = Vec::with_capacity(row.len());
+    for (c, v) in row {
+        match out.last_mut() {
+            Some((lc, lv)) if *lc == c => {
+                for (a, b) in lv.iter_mut().zip(v) {
+                    *a += b;
+                }
+            }
+            _ => out.push((c, v)),
+        }
+    }
+    out
+}
+
 /// The coarse operator: rows of the same parent merged (area-weighted), columns summed.
 fn coarse_operator(f: &Sparse, mesh: &Mesh) -> Sparse {
     let cols = f.map_cols(&mesh.coarse_of);
@@ -744,18 +751,8 @@ fn coarse_operator(f: &Sparse, mesh: &Mesh) -> Sparse {
         }
     }
     let mut entries = Vec::new();
-    for (r, mut row) in rows.into_iter().enumerate() {
-        row.sort_by_key(|e| e.0);
-        let mut k = 0;
-        while k < row.len() {
-            let (c, mut v) = row[k];
-            k += 1;
-            while k < row.len() && row[k].0 == c {
-                for (a, b) in v.iter_mut().zip(row[k].1) {
-                    *a += b;
-                }
-                k += 1;
-            }
+    for (r, row) in rows.into_iter().enumerate() {
+        for (c, v) in merge_columns(row) {
             entries.push((r as u32, c, v.map(|x| x as f32)));
         }
     }

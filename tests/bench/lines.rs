@@ -49,18 +49,7 @@ fn path_traced(
         let mut i = tri;
         let mut b = barycentric(scene.triangles[tri as usize].v, y);
         while let Some(fc) = h.elements[i as usize].first_child {
-            let [b0, b1, b2] = b;
-            let (k, nb) = if b0 >= 0.5 {
-                (0, [2.0 * b0 - 1.0, 2.0 * b1, 2.0 * b2])
-            } else if b1 >= 0.5 {
-                (1, [2.0 * b0, 2.0 * b1 - 1.0, 2.0 * b2])
-            } else if b2 >= 0.5 {
-                (2, [2.0 * b0, 2.0 * b1, 2.0 * b2 - 1.0])
-            } else {
-                (3, [1.0 - 2.0 * b2, 1.0 - 2.0 * b0, 1.0 - 2.0 * b1])
-            };
-            b = nb;
-            i = fc + k;
+            i = fc + daystep::hierarchy::child_of(&mut b) as u32;
         }
         e[i as usize]
     };
