@@ -55,7 +55,8 @@ pub struct TransportParams {
     pub parts: u32,
     /// Sensor gather rays over all parts.
     pub gather_rays: u32,
-    /// Stop sweeping when the extrapolated iteration error is below this fraction of ‖B‖.
+    /// Stop sweeping when the extrapolated iteration error is below this fraction of each
+    /// row's B (default 1e-3: a tenth of the default noise, measured 1.6 %).
     pub tolerance: f64,
     /// Hard cap on Gauss–Seidel sweeps per solve.
     pub max_sweeps: u32,
@@ -81,7 +82,7 @@ impl Default for TransportParams {
             resolution: 512,
             parts: 4,
             gather_rays: 4096,
-            tolerance: 1e-4,
+            tolerance: 1e-3,
             max_sweeps: 1000,
             margin_m: 6.0,
             far_element_area_m2: 4.0,
