@@ -136,8 +136,8 @@ pub struct AnnualArgs {
     /// Last day, YYYY-MM-DD.
     #[arg(long)]
     pub end: Option<String>,
-    /// Timestep, minutes: must equal the weather file's interval (sub-hourly interpolation
-    /// is not implemented yet).
+    /// Timestep, minutes: the weather file's interval (default), or a divisor of it, whose
+    /// steps interpolate the file's irradiances linearly in time (the report says so).
     #[arg(long)]
     pub step: Option<u32>,
     /// Also write a Radiance/DAYSIM-style illuminance.ill.
@@ -376,16 +376,7 @@ fn run_annual(a: AnnualArgs) -> Result<()> {
     }
     let mut weather = crate::weather::read_weather(&a.weather)?;
     if let Some(step) = a.step {
-        if step != weather.interval_minutes {
-            return Err(Error::arg(
-                "--step",
-                step,
-                format!(
-                    "must equal the weather file's interval ({} min): sub-hourly interpolation is not implemented yet",
-                    weather.interval_minutes
-                ),
-            ));
-        }
+        weather = crate::weather::resample(&weather, step)?;
     }
     let ws = &weather.site;
     if (ws.latitude - scene.site.latitude).abs() > 0.1

@@ -17,7 +17,10 @@
 //! the leap year of its 29 February records when it has one (see [`epw`] and [`wea`]).
 
 pub mod epw;
+pub mod resample;
 pub mod wea;
+
+pub use resample::resample;
 
 use crate::error::{Error, Result};
 use crate::site::Site;
