@@ -214,3 +214,50 @@ fn a_day_agrees_with_independent_cold_instants() {
         "{within}/{compared}"
     );
 }
+
+#[test]
+fn adjoint_daylight_coefficients_equal_forward_solves() {
+    // The same two days with per-step forward solves (the default) and with adjoint
+    // responses: the same linear system read in another order, so equal within the
+    // iteration tolerance (1e-3 relative per solve), far below the stated error.
+    let d = tempfile::tempdir().unwrap();
+    let (scene, weather, q, store) = setup(d.path());
+    let go = AtomicBool::new(false);
+    let quiet = |_: usize, _: usize| {};
+    let control = RunControl {
+        stop: &go,
+        progress: &quiet,
+    };
+    let run = |name: &str, bytes: u64| {
+        let out = d.path().join(name);
+        let o = AnnualOptions {
+            response_max_bytes: bytes,
+            ..opts(("2021-03-20", "2021-03-21"), (1, 1))
+        };
+        let r = run_annual(&scene, &weather, &q, &store, &out, &o, &control).unwrap();
+        let (_, rows) =
+            daystep::export::read_illuminance_csv(&out.join("illuminance.csv")).unwrap();
+        (r, rows)
+    };
+    let (rf, forward) = run("forward", 0);
+    let (ra, adjoint) = run("adjoint", u64::MAX);
+    assert_eq!(
+        (rf.interreflection.as_str(), ra.interreflection.as_str()),
+        ("forward", "adjoint")
+    );
+    let mut worst = 0.0f64;
+    let mut lit = 0;
+    for (a, f) in adjoint.iter().zip(&forward) {
+        for (x, y) in a.iter().zip(f) {
+            if *y > 10.0 {
+                lit += 1;
+                worst = worst.max((x - y).abs() / y);
+            } else {
+                assert!((x - y).abs() < 0.1, "{x} vs {y}");
+            }
+        }
+    }
+    eprintln!("adjoint vs forward: {lit} lit sensor-steps, worst relative difference {worst:.2e}");
+    assert!(lit > 50);
+    assert!(worst < 5e-3, "{worst}");
+}

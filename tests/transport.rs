@@ -234,3 +234,65 @@ fn parallel_plates_beside_a_far_ground() {
     // About 50 000 lines cross the receiver: binomial noise of F ≈ 0.4 %; 2 % is 5σ.
     assert!((s / a - exact).abs() < 0.02 * exact, "{}", s / a);
 }
+
+#[test]
+fn adjoint_responses_equal_the_forward_solve() {
+    // The furnace through the adjoint alone: the emitters' response is M/(1 − ρ) exactly.
+    let scene = furnace(2.0, 0.9, 1.0);
+    let t = Transport::build(&scene, &scene.sensors, &small());
+    let r = t.response(u64::MAX).expect("small enough");
+    let e = r.sensors_of(&r.start())[0];
+    let exact = PI / (1.0 - 0.9);
+    let err = (e.irradiance.x - exact).abs() / exact;
+    eprintln!(
+        "adjoint furnace ρ 0.9: {:.5} exact {exact:.5} rel {err:.1e}",
+        e.irradiance.x
+    );
+    assert!(err <= 10.0 * t.params.tolerance, "{err}");
+
+    // A coloured room lit on the floor: same sensors (value, noise and discretisation
+    // estimates) as the forward solve, channel by channel, within the iteration tolerance.
+    let mut b = Builder::new();
+    let m = b.material("all", 0.6, 0.0);
+    b.input.materials[m as usize].kd = Rgb::new(0.7, 0.5, 0.2);
+    b.hrect(0.0, 4.0, 0.0, 4.0, 0.0, true, m);
+    b.hrect(0.0, 4.0, 0.0, 4.0, 4.0, false, m);
+    b.walls_inward(0.0, 4.0, 0.0, 4.0, 0.0, 4.0, m);
+    b.sensor(DVec3::new(2.3, 1.8, 0.5), DVec3::Z);
+    b.sensor(DVec3::new(0.4, 3.1, 2.5), DVec3::X);
+    let scene = b.build();
+    let t = Transport::build(&scene, &scene.sensors, &small());
+    let light = floor_light(&t, 100.0);
+    let (st, _) = t.solve(&light, None);
+    let forward = t.sensors(&st);
+    let r = t.response(u64::MAX).unwrap();
+    let weights: Vec<(u32, Rgb)> = light
+        .iter()
+        .enumerate()
+        .map(|(i, v)| (i as u32, *v / 100.0))
+        .collect();
+    let d = r.direction(&t, &weights);
+    let mut acc = r.start();
+    r.add(&mut acc, Rgb::splat(100.0), &d);
+    let adjoint = r.sensors_of(&acc);
+    assert_eq!(forward.len(), 2);
+    for (a, f) in adjoint.iter().zip(&forward) {
+        for c in 0..3 {
+            let rel = |x: f64, y: f64| (x - y).abs() / f.irradiance[c];
+            eprintln!(
+                "  channel {c}: forward {:.4} adjoint {:.4} σ {:.4}/{:.4} disc {:.4}/{:.4}",
+                f.irradiance[c],
+                a.irradiance[c],
+                f.std_err[c],
+                a.std_err[c],
+                f.discretisation[c],
+                a.discretisation[c]
+            );
+            assert!(rel(a.irradiance[c], f.irradiance[c]) <= 4.0 * t.params.tolerance);
+            assert!(rel(a.std_err[c], f.std_err[c]) <= 8.0 * t.params.tolerance);
+            assert!(rel(a.discretisation[c], f.discretisation[c]) <= 8.0 * t.params.tolerance);
+        }
+    }
+    // A budget below what the responses need: declined, the caller keeps the forward solve.
+    assert!(t.response(1000).is_none());
+}

@@ -408,6 +408,7 @@ fn run_annual(a: AnnualArgs) -> Result<()> {
         shard,
         metrics: a.metrics.params(),
         ill: a.ill,
+        ..sequence::annual::AnnualOptions::default()
     };
     opts.metrics.validate()?;
     for w in &weather.warnings {

@@ -36,12 +36,14 @@
 pub mod convergence;
 pub mod hmc;
 pub mod lines;
+pub mod response;
 pub mod transport;
 pub mod warm_start;
 
 pub use convergence::{EnergyBalance, SolveReport, StopReason};
 pub use hmc::solve;
 pub use lines::{gather_sensor, SensorIndirect, Tracer};
+pub use response::{DirectionResponse, SensorResponse};
 pub use transport::{
     Transport, TransportParams, TransportReport, TransportSensor, TransportState, TransportStats,
 };

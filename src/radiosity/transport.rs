@@ -94,10 +94,10 @@ impl Default for TransportParams {
 
 /// Sparse rows: row r holds (column, value) pairs `cols[offsets[r]..offsets[r+1]]`.
 #[derive(Clone, Debug, Default)]
-struct Sparse {
-    offsets: Vec<u32>,
-    cols: Vec<u32>,
-    vals: Vec<[f32; 3]>,
+pub(super) struct Sparse {
+    pub(super) offsets: Vec<u32>,
+    pub(super) cols: Vec<u32>,
+    pub(super) vals: Vec<[f32; 3]>,
 }
 
 impl Sparse {
@@ -112,7 +112,7 @@ impl Sparse {
         s
     }
 
-    fn rows(&self) -> usize {
+    pub(super) fn rows(&self) -> usize {
         self.offsets.len().saturating_sub(1)
     }
 
@@ -278,11 +278,11 @@ impl Mesh {
 /// One independent estimate: the operator (E_i = Σ_j F_ij B_j, W/m² per W/m²) and the
 /// sensor gather (E_k = Σ_j G_kj B_j).
 #[derive(Clone, Debug, Default)]
-struct Part {
-    f: Sparse,
-    g: Sparse,
-    f_coarse: Sparse,
-    g_coarse: Sparse,
+pub(super) struct Part {
+    pub(super) f: Sparse,
+    pub(super) g: Sparse,
+    pub(super) f_coarse: Sparse,
+    pub(super) g_coarse: Sparse,
 }
 
 /// One sparse matrix as flat arrays: row offsets, columns, values (RGB).
@@ -310,12 +310,12 @@ pub struct TransportStats {
 pub struct Transport {
     /// The mesh.
     pub mesh: Mesh,
-    parts: Vec<Part>,
+    pub(super) parts: Vec<Part>,
     /// Reflectance (clamped below 1; 0 for glazing) and exitance π·Ke per row.
-    rho: Vec<Rgb>,
-    emit: Vec<Rgb>,
-    coarse_rho: Vec<Rgb>,
-    coarse_area: Vec<f64>,
+    pub(super) rho: Vec<Rgb>,
+    pub(super) emit: Vec<Rgb>,
+    pub(super) coarse_rho: Vec<Rgb>,
+    pub(super) coarse_area: Vec<f64>,
     /// Parameters used.
     pub params: TransportParams,
     /// Build counters.

@@ -1,0 +1,336 @@
+//! Sensor responses through the global-line operator, by its adjoint: for every mesh row r
+//! and sensor s, X[r][s] = ∂(indirect irradiance at s)/∂(unshot exitance S_r), the
+//! solution of X_r = G_sr + Σ_k ρ_k F_kr X_k (the transpose of B = S + ρ ⊙ F B, read by
+//! the sensor gather G). With X, a sensor's indirect irradiance for any source is
+//! Σ_r X[r][s] ⊙ S_r: no per-timestep solve.
+//!
+//! Why: an annual run solves the same operator for thousands of source vectors but reads
+//! it at only a few hundred sensors. One adjoint solve per sensor (all sensors at once, as
+//! vectors) replaces one forward solve per timestep, and a source direction's response
+//! becomes a short vector per sensor (a daylight coefficient) that every later timestep
+//! reuses. The result is the forward solution reordered, so it equals
+//! [`Transport::sensors`] within the iteration tolerance, with the same noise (spread of
+//! the parts) and discretisation (coarse level) estimates.
+//!
+//! Memory is rows × sensors × 3 × 4 bytes per part and level, so [`Transport::response`]
+//! declines (returns `None`) above a byte budget and callers keep the forward solve.
+
+use super::transport::{Sparse, Transport, TransportSensor};
+use crate::photometry::Rgb;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Sensors solved together (a fixed block: results do not depend on the thread count).
+const BLOCK: usize = 32;
+
+/// The adjoint responses of a [`Transport`]'s sensors (see the module doc).
+#[derive(Clone, Debug)]
+pub struct SensorResponse {
+    sensors: usize,
+    /// Per (part, level) with level 0 fine and 1 coarse: rows × 3 × sensors, f32, channel
+    /// planes per row (X[r][c][s]).
+    x: Vec<Vec<f32>>,
+    /// Per (part, level): the response to the scene's own emitters, 3 × sensors.
+    emitted: Vec<Vec<f32>>,
+    /// Gauss–Seidel sweeps summed over parts, levels and sensor blocks.
+    pub sweeps: u64,
+    /// Wall time of the solve, s.
+    pub seconds: f64,
+}
+
+/// One source direction's daylight coefficients: per (part, level), 3 × sensors values of
+/// indirect irradiance (W/m²) per unit normal irradiance of the source (W/m²).
+#[derive(Clone, Debug, Default)]
+pub struct DirectionResponse(Vec<f32>);
+
+impl Transport {
+    /// The adjoint responses of this operator's sensors, or `None` when they would take
+    /// more than `max_bytes` (then use [`Transport::solve`] per timestep).
+    pub fn response(&self, max_bytes: u64) -> Option<SensorResponse> {
+        let t0 = Instant::now();
+        let k = self.parts.first().map_or(0, |p| p.g.rows());
+        let rows = self.rows() + self.mesh.coarse_rows;
+        let bytes = self.parts.len() as u64 * rows as u64 * 3 * k as u64 * 4;
+        if bytes > max_bytes || self.parts.is_empty() {
+            return None;
+        }
+        let tol = self.params.tolerance;
+        let max = self.params.max_sweeps;
+        // Jobs: (part, level, sensor block), each an independent system.
+        let blocks = k.div_ceil(BLOCK).max(1);
+        let jobs: Vec<(usize, usize, usize)> = (0..self.parts.len())
+            .flat_map(|p| (0..2).flat_map(move |l| (0..blocks).map(move |b| (p, l, b))))
+            .collect();
+        let solved: Vec<(Vec<f32>, u32)> = jobs
+            .par_iter()
+            .map(|&(p, l, b)| {
+                let part = &self.parts[p];
+                let (f, g, rho) = if l == 0 {
+                    (&part.f, &part.g, &self.rho[..])
+                } else {
+                    (&part.f_coarse, &part.g_coarse, &self.coarse_rho[..])
+                };
+                let s0 = b * BLOCK;
+                let s1 = (s0 + BLOCK).min(k);
+                adjoint_block(f, g, rho, s0..s1, tol, max)
+            })
+            .collect();
+        let mut x: Vec<Vec<f32>> = Vec::new();
+        let mut sweeps = 0u64;
+        let mut it = solved.into_iter();
+        for _p in 0..self.parts.len() {
+            for l in 0..2 {
+                let n = if l == 0 {
+                    self.rows()
+                } else {
+                    self.mesh.coarse_rows
+                };
+                let mut full = vec![0f32; n * 3 * k];
+                for b in 0..blocks {
+                    let (xb, sw) = it.next().expect("one result per job");
+                    sweeps += sw as u64;
+                    let s0 = b * BLOCK;
+                    let w = (s0 + BLOCK).min(k) - s0;
+                    for r in 0..n {
+                        for c in 0..3 {
+                            let dst = (r * 3 + c) * k + s0;
+                            let src = (r * 3 + c) * w;
+                            full[dst..dst + w].copy_from_slice(&xb[src..src + w]);
+                        }
+                    }
+                }
+                x.push(full);
+            }
+        }
+        let mut resp = SensorResponse {
+            sensors: k,
+            x,
+            emitted: Vec::new(),
+            sweeps,
+            seconds: 0.0,
+        };
+        resp.emitted = resp.apply(self, &self.emit);
+        resp.seconds = t0.elapsed().as_secs_f64();
+        Some(resp)
+    }
+}
+
+impl SensorResponse {
+    /// Number of sensors.
+    pub fn sensors(&self) -> usize {
+        self.sensors
+    }
+
+    /// Per (part, level), 3 × sensors: the response to unshot exitance `s` given on the
+    /// fine rows (the coarse level reads its area average, as [`Transport::solve`] does).
+    fn apply(&self, op: &Transport, s: &[Rgb]) -> Vec<Vec<f32>> {
+        let sparse: Vec<(u32, Rgb)> = s
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| **v != Rgb::ZERO)
+            .map(|(r, v)| (r as u32, *v))
+            .collect();
+        self.apply_sparse(op, &sparse)
+    }
+
+    fn apply_sparse(&self, op: &Transport, s: &[(u32, Rgb)]) -> Vec<Vec<f32>> {
+        let k = self.sensors;
+        // The coarse level's source: area averages over each coarse row's children.
+        let mut acc: Vec<(u32, Rgb)> = s
+            .iter()
+            .map(|&(r, v)| (op.mesh.coarse_of[r as usize], v * op.mesh.area[r as usize]))
+            .collect();
+        acc.sort_by_key(|e| e.0);
+        let mut coarse: Vec<(u32, Rgb)> = Vec::new();
+        for (c, v) in acc {
+            match coarse.last_mut() {
+                Some((lc, lv)) if *lc == c => *lv += v,
+                _ => coarse.push((c, v)),
+            }
+        }
+        for (c, v) in &mut coarse {
+            let a = op.coarse_area[*c as usize];
+            *v = if a > 0.0 { *v / a } else { Rgb::ZERO };
+        }
+        self.x
+            .iter()
+            .enumerate()
+            .map(|(i, x)| {
+                let src = if i % 2 == 0 { s } else { &coarse[..] };
+                // f32 lanes: this loop is the per-direction cost (rows × 3 × sensors).
+                let mut out = vec![0f32; 3 * k];
+                for &(r, v) in src {
+                    for c in 0..3 {
+                        let w = v[c] as f32;
+                        if w == 0.0 {
+                            continue;
+                        }
+                        let row = &x[(r as usize * 3 + c) * k..][..k];
+                        for (o, xv) in out[c * k..(c + 1) * k].iter_mut().zip(row) {
+                            *o += w * *xv;
+                        }
+                    }
+                }
+                out
+            })
+            .collect()
+    }
+
+    /// The daylight coefficients of one source direction, from its mesh irradiance per
+    /// unit normal irradiance `weights` (row, RGB W/m² per W/m²).
+    pub fn direction(&self, op: &Transport, weights: &[(u32, Rgb)]) -> DirectionResponse {
+        let s: Vec<(u32, Rgb)> = weights
+            .iter()
+            .map(|&(r, w)| (r, op.rho[r as usize] * w))
+            .filter(|(_, v)| *v != Rgb::ZERO)
+            .collect();
+        DirectionResponse(self.apply_sparse(op, &s).into_iter().flatten().collect())
+    }
+
+    /// A zeroed accumulator for [`SensorResponse::add`], holding the emitters' response.
+    pub fn start(&self) -> Vec<f64> {
+        self.emitted.iter().flatten().map(|&v| v as f64).collect()
+    }
+
+    /// Adds one source of normal irradiance `e` (RGB W/m²) with coefficients `d` to `acc`.
+    pub fn add(&self, acc: &mut [f64], e: Rgb, d: &DirectionResponse) {
+        let k = self.sensors;
+        for (i, (a, v)) in acc.chunks_mut(k).zip(d.0.chunks(k)).enumerate() {
+            let w = e[i % 3];
+            if w == 0.0 {
+                continue;
+            }
+            for (a, v) in a.iter_mut().zip(v) {
+                *a += w * *v as f64;
+            }
+        }
+    }
+
+    /// Each sensor's indirect irradiance from an accumulator, with the same mean, noise
+    /// and discretisation estimates as [`Transport::sensors`].
+    pub fn sensors_of(&self, acc: &[f64]) -> Vec<TransportSensor> {
+        let k = self.sensors;
+        let parts = self.x.len() / 2;
+        let n = parts as f64;
+        let at = |p: usize, l: usize, s: usize| -> Rgb {
+            let base = (p * 2 + l) * 3 * k;
+            Rgb::new(acc[base + s], acc[base + k + s], acc[base + 2 * k + s])
+        };
+        (0..k)
+            .map(|s| {
+                let fine: Vec<Rgb> = (0..parts).map(|p| at(p, 0, s)).collect();
+                let coarse = (0..parts).fold(Rgb::ZERO, |a, p| a + at(p, 1, s)) / n;
+                let mean = fine.iter().fold(Rgb::ZERO, |a, x| a + *x) / n;
+                let var = fine
+                    .iter()
+                    .fold(Rgb::ZERO, |a, x| a + (*x - mean) * (*x - mean))
+                    / (n - 1.0)
+                    / n;
+                TransportSensor {
+                    irradiance: mean,
+                    std_err: super::sqrt3(var),
+                    discretisation: (mean - coarse).abs(),
+                }
+            })
+            .collect()
+    }
+}
+
+/// Gauss–Seidel on the adjoint for sensors `range`: returns X as rows × 3 × |range| and
+/// the sweeps done.
+fn adjoint_block(
+    f: &Sparse,
+    g: &Sparse,
+    rho: &[Rgb],
+    range: std::ops::Range<usize>,
+    tol: f64,
+    max_sweeps: u32,
+) -> (Vec<f32>, u32) {
+    let n = f.rows();
+    let w = range.len();
+    if w == 0 || n == 0 {
+        return (vec![0.0; n * 3 * w], 0);
+    }
+    // Gᵀ for the block: x starts at it.
+    let mut gt = vec![0f32; n * 3 * w];
+    for (j, s) in range.clone().enumerate() {
+        for e in g.offsets[s] as usize..g.offsets[s + 1] as usize {
+            let r = g.cols[e] as usize;
+            for c in 0..3 {
+                gt[(r * 3 + c) * w + j] += g.vals[e][c];
+            }
+        }
+    }
+    // Fᵀ with ρ of the source row folded in: row i lists (k, ρ_k F_ki).
+    let mut count = vec![0u32; n + 1];
+    for &c in &f.cols {
+        count[c as usize + 1] += 1;
+    }
+    for i in 0..n {
+        count[i + 1] += count[i];
+    }
+    let mut fill = count.clone();
+    let mut cols = vec![0u32; f.cols.len()];
+    let mut vals = vec![[0f32; 3]; f.cols.len()];
+    for (kr, (&r, w)) in rho.iter().zip(f.offsets.windows(2)).enumerate() {
+        for e in w[0] as usize..w[1] as usize {
+            let i = f.cols[e] as usize;
+            let at = fill[i] as usize;
+            fill[i] += 1;
+            cols[at] = kr as u32;
+            let v = f.vals[e];
+            vals[at] = [
+                (r.x * v[0] as f64) as f32,
+                (r.y * v[1] as f64) as f32,
+                (r.z * v[2] as f64) as f32,
+            ];
+        }
+    }
+    let g_max = gt.iter().fold(0f32, |a, v| a.max(v.abs()));
+    let mut x = gt.clone();
+    if g_max == 0.0 {
+        return (x, 0);
+    }
+    let floor = 1e-6 * g_max;
+    let mut new = vec![0f32; 3 * w];
+    let mut prev_change = f64::INFINITY;
+    let rho_max = rho.iter().map(|r| r.max_element()).fold(0.5, f64::max);
+    for sweep in 1..=max_sweeps {
+        let mut change = 0f64;
+        for i in 0..n {
+            new.copy_from_slice(&gt[i * 3 * w..(i + 1) * 3 * w]);
+            for e in count[i] as usize..count[i + 1] as usize {
+                let src = cols[e] as usize * 3 * w;
+                let v = vals[e];
+                for c in 0..3 {
+                    let coef = v[c];
+                    if coef == 0.0 {
+                        continue;
+                    }
+                    let xs = &x[src + c * w..src + (c + 1) * w];
+                    for (o, xv) in new[c * w..(c + 1) * w].iter_mut().zip(xs) {
+                        *o += coef * *xv;
+                    }
+                }
+            }
+            let old = &mut x[i * 3 * w..(i + 1) * 3 * w];
+            let (mut d, mut m) = (0f32, 0f32);
+            for (o, nv) in old.iter().zip(&new) {
+                d = d.max((nv - o).abs());
+                m = m.max(nv.abs());
+            }
+            change = change.max(d as f64 / m.max(floor) as f64);
+            old.copy_from_slice(&new);
+        }
+        let q = if prev_change.is_finite() && prev_change > 0.0 {
+            (change / prev_change).clamp(0.5, 0.999)
+        } else {
+            rho_max
+        };
+        prev_change = change;
+        if change * q / (1.0 - q) <= tol {
+            return (x, sweep);
+        }
+    }
+    (x, max_sweeps)
+}
