@@ -6,6 +6,7 @@ mod annual; // annual runs: resume after Ctrl-C and a cut line, shards merged, a
 mod cache; // projection cache: round trips, bad files rebuilt, eviction, concurrent writers, CLI
 mod cache_runs; // the cache in whole runs: warm = cold, Kd/site/weather hit, vertex misses, damage, 4 processes
 mod cli; // the binary end to end: exit codes, messages naming file:line, outputs
+mod df; // daylight factor: 100 % in the open, the vertical formula, roof-opening sky component, CLI
 mod extremes; // low sun, polar day and night, turbidity limits, slivers, far coordinates
 mod layers; // the layer rule of lib.rs: lower layers never import higher ones
 mod physics; // closed-form daylight: unobstructed skies, roof opening, sun footprint, glazing

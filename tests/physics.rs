@@ -195,7 +195,7 @@ fn cie_general_skies_against_independent_quadrature() {
 }
 
 /// A black 10 × 10 × 3 m room whose only opening is a hole in the roof centred above (5, 5).
-fn roof_opening_room(hole: f64, glazing: Option<f64>) -> daystep::scene::Scene {
+pub(crate) fn roof_opening_room(hole: f64, glazing: Option<f64>) -> daystep::scene::Scene {
     let mut b = Builder::new();
     let black = b.material("black", 0.0, 0.0);
     b.hrect(0.0, 10.0, 0.0, 10.0, 0.0, true, black);

@@ -81,6 +81,8 @@ pub enum Command {
         #[arg(long)]
         seed: Option<u64>,
     },
+    /// Daylight factor at every sensor under the CIE overcast sky: df.csv, report.json.
+    Df(DfArgs),
     /// A time series over a weather file (EPW or WEA): illuminance.csv, direct_sun.csv,
     /// metrics.csv, summary.json, report.json.
     Annual(AnnualArgs),
@@ -105,6 +107,29 @@ pub enum Command {
         #[command(subcommand)]
         action: CacheAction,
     },
+}
+
+/// Arguments of `daystep df`.
+#[derive(Args, Debug)]
+pub struct DfArgs {
+    /// The scene file (scene.toml); it must name a sensors file.
+    pub scene: PathBuf,
+    /// Output folder (df.csv, report.json).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Quality preset: draft, default, high, reference.
+    #[arg(long, default_value = "default")]
+    pub quality: String,
+    /// Projection cache folder (created if missing; a folder that cannot be written is
+    /// used read-only or not at all, with a warning).
+    #[arg(long, default_value = "cache")]
+    pub cache: PathBuf,
+    /// Run without the projection cache.
+    #[arg(long)]
+    pub no_cache: bool,
+    /// Seed of the Monte Carlo interreflection (results are a pure function of it).
+    #[arg(long)]
+    pub seed: Option<u64>,
 }
 
 /// Arguments of `daystep annual`.
@@ -341,6 +366,52 @@ fn open_store(dir: &std::path::Path, no_cache: bool) -> crate::cache::Store {
     }
 }
 
+/// The preset `name` (`--quality`), with every random stream from `seed` when given.
+fn quality_arg(name: &str, seed: Option<u64>) -> Result<Quality> {
+    let q = Quality::preset(name).ok_or_else(|| {
+        Error::arg(
+            "--quality",
+            name,
+            "expected draft, default, high or reference",
+        )
+    })?;
+    Ok(match seed {
+        Some(s) => q.with_seed(s),
+        None => q,
+    })
+}
+
+fn run_df(a: DfArgs) -> Result<()> {
+    let q = quality_arg(&a.quality, a.seed)?;
+    let scene = Scene::load(&a.scene)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    let store = open_store(&a.cache, a.no_cache);
+    let result = sequence::df::run_df(&scene, &q, &store)?;
+    sequence::df::write_df(&scene, &result, &a.out)?;
+    let r = &result.report;
+    for w in &r.instant.warnings {
+        eprintln!("warning: {w}");
+    }
+    let s = &r.df_summary;
+    eprintln!(
+        "daystep df: {} sensors, outside {:.0} lx (CIE overcast, unobstructed, no ground); DF mean {:.2} %, min {:.2} %, max {:.2} %, {:.0} % of sensors >= {} %, uniformity {:.2}; max df_err {:.2} %; {:.3} s; wrote {}",
+        s.sensors,
+        result.outside_lux,
+        s.mean_df,
+        s.min_df,
+        s.max_df,
+        100.0 * s.fraction_at_least_threshold,
+        s.threshold_df,
+        s.uniformity,
+        s.max_df_err,
+        r.instant.total_seconds,
+        a.out.display()
+    );
+    Ok(())
+}
+
 fn parse_date(flag: &str, v: &str) -> Result<chrono::NaiveDate> {
     chrono::NaiveDate::parse_from_str(v, "%Y-%m-%d")
         .map_err(|_| Error::arg(flag, v, "expected a date YYYY-MM-DD"))
@@ -488,6 +559,7 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Cache { action } => run_cache(action),
         Command::Annual(a) => run_annual(a),
+        Command::Df(a) => run_df(a),
         Command::Merge {
             parts,
             out,
@@ -513,17 +585,7 @@ pub fn run(cli: Cli) -> Result<()> {
             no_cache,
             seed,
         } => {
-            let q = Quality::preset(&quality).ok_or_else(|| {
-                Error::arg(
-                    "--quality",
-                    &quality,
-                    "expected draft, default, high or reference",
-                )
-            })?;
-            let q = match seed {
-                Some(s) => q.with_seed(s),
-                None => q,
-            };
+            let q = quality_arg(&quality, seed)?;
             let spec = sky_spec(sky, dni, dhi, sky_type, turbidity, dew_point)?;
             let scene = Scene::load(&scene)?;
             for w in &scene.warnings {

@@ -473,6 +473,22 @@ pub fn run_instant_cached(
     quality: &Quality,
     store: &crate::cache::Store,
 ) -> Result<InstantResult> {
+    run_instant_with_sky(scene, instant_utc, local, spec, quality, store).map(|(r, _)| r)
+}
+
+/// [`run_instant_cached`], returning also the sky it built for the instant (for quantities
+/// of the sky itself, such as its unobstructed horizontal illuminance).
+///
+/// # Errors
+/// Bad time or sky parameters ([`Error::Input`]).
+pub fn run_instant_with_sky(
+    scene: &Scene,
+    instant_utc: DateTime<Utc>,
+    local: NaiveDateTime,
+    spec: &SkySpec,
+    quality: &Quality,
+    store: &crate::cache::Store,
+) -> Result<(InstantResult, Sky)> {
     let t0 = Instant::now();
     let mut report = Report {
         version: env!("CARGO_PKG_VERSION").into(),
@@ -510,7 +526,7 @@ pub fn run_instant_cached(
     result.report.cache = Some(store.stats());
     result.report.warnings.extend(store.warnings());
     result.report.total_seconds = t0.elapsed().as_secs_f64();
-    Ok(result)
+    Ok((result, sky))
 }
 
 /// Writes `sensors.csv` and `report.json` into `out` (atomically, each).

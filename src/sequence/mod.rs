@@ -3,11 +3,13 @@
 
 pub mod annual;
 pub mod config;
+pub mod df;
 pub mod directions;
 pub mod instant;
 pub mod operator;
 pub mod report;
 
 pub use config::{Quality, SkySpec};
+pub use df::{run_df, write_df, DfResult, SensorDf};
 pub use instant::{run_instant, write_instant, InstantResult, SensorValue};
 pub use report::Report;
