@@ -168,6 +168,10 @@ pub struct AnnualArgs {
     /// Also write a Radiance/DAYSIM-style illuminance.ill.
     #[arg(long)]
     pub ill: bool,
+    /// Also write surfaces.csv: per OBJ group and step, mean incident irradiance (W/m²)
+    /// and, for glazing, transmitted solar power (W).
+    #[arg(long)]
+    pub surfaces: bool,
     /// Seed of the Monte Carlo parts (results are a pure function of it).
     #[arg(long)]
     pub seed: Option<u64>,
@@ -479,6 +483,7 @@ fn run_annual(a: AnnualArgs) -> Result<()> {
         shard,
         metrics: a.metrics.params(),
         ill: a.ill,
+        surfaces: a.surfaces,
         ..sequence::annual::AnnualOptions::default()
     };
     opts.metrics.validate()?;

@@ -123,6 +123,7 @@ pub struct IlluminanceWriter {
     partial: PathBuf,
     out: BufWriter<File>,
     sensors: usize,
+    header: String,
 }
 
 impl IlluminanceWriter {
@@ -138,6 +139,16 @@ impl IlluminanceWriter {
     /// # Errors
     /// [`Error::Io`] naming the partial file.
     pub fn create(path: &Path, sensors: usize) -> Result<Self> {
+        Self::create_with_header(path, illuminance_header(sensors), sensors)
+    }
+
+    /// [`IlluminanceWriter::create`] for another table of the same form: `header` (with
+    /// its newline) names `time` and `columns` value columns.
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming the partial file.
+    pub fn create_with_header(path: &Path, header: String, columns: usize) -> Result<Self> {
+        let sensors = columns;
         let partial = Self::partial_path(path);
         if let Some(dir) = partial.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
@@ -148,8 +159,10 @@ impl IlluminanceWriter {
             partial,
             out: BufWriter::new(file),
             sensors,
+            header,
         };
-        w.write(illuminance_header(sensors).as_bytes())?;
+        let h = w.header.clone();
+        w.write(h.as_bytes())?;
         Ok(w)
     }
 
@@ -162,26 +175,39 @@ impl IlluminanceWriter {
     /// [`Error::Input`] naming the partial file, line and value when its header is not the
     /// one for `sensors` columns or a complete row is malformed; [`Error::Io`].
     pub fn resume(path: &Path, sensors: usize) -> Result<(Self, Vec<String>)> {
+        Self::resume_with_header(path, illuminance_header(sensors), sensors)
+    }
+
+    /// [`IlluminanceWriter::resume`] for a table made by
+    /// [`IlluminanceWriter::create_with_header`].
+    ///
+    /// # Errors
+    /// As [`IlluminanceWriter::resume`].
+    pub fn resume_with_header(
+        path: &Path,
+        header: String,
+        columns: usize,
+    ) -> Result<(Self, Vec<String>)> {
+        let sensors = columns;
         let partial = Self::partial_path(path);
         if !partial.exists() {
-            return Ok((Self::create(path, sensors)?, Vec::new()));
+            return Ok((Self::create_with_header(path, header, sensors)?, Vec::new()));
         }
         let text = files::read_text(&partial)?;
         // Only complete lines count: a crash can cut the last one.
         let keep = text.rfind('\n').map_or(0, |i| i + 1);
         if keep == 0 {
             // Interrupted before the header was complete: nothing to keep.
-            return Ok((Self::create(path, sensors)?, Vec::new()));
+            return Ok((Self::create_with_header(path, header, sensors)?, Vec::new()));
         }
         let text = &text[..keep];
-        let header = illuminance_header(sensors);
         if !text.starts_with(&header) {
             return Err(Error::input(
                 &partial,
                 Some(1),
                 Some(text.lines().next().unwrap_or("")),
                 format!(
-                    "cannot continue: the header is not the one for {sensors} sensors \
+                    "cannot continue: the header is not the one for {sensors} columns \
                      (remove the file to start over)"
                 ),
             ));
@@ -201,6 +227,7 @@ impl IlluminanceWriter {
                 partial,
                 out,
                 sensors,
+                header,
             },
             times,
         ))

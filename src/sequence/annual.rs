@@ -19,6 +19,7 @@
 use super::config::{Quality, SkySpec};
 use super::directions::Directions;
 use super::instant::{build_sky, sensors_from_responses, sources_for, SKY_NORMALISATION_REL};
+use super::surfaces::SurfaceMap;
 use crate::cache::Store;
 use crate::error::{Error, Result};
 use crate::export::{self, IlluminanceWriter};
@@ -69,6 +70,8 @@ pub struct AnnualOptions {
     /// default, see [`RESPONSE_MAX_BYTES`] for why) makes every step a warm-started forward
     /// solve.
     pub response_max_bytes: u64,
+    /// Also write `surfaces.csv` (per group: incident irradiance, transmitted solar power).
+    pub surfaces: bool,
 }
 
 impl Default for AnnualOptions {
@@ -80,6 +83,7 @@ impl Default for AnnualOptions {
             metrics: MetricParams::default(),
             ill: false,
             response_max_bytes: 0,
+            surfaces: false,
         }
     }
 }
@@ -148,6 +152,7 @@ struct Step<'w> {
 struct StepOut {
     total: Vec<f64>,
     sun: Vec<f64>,
+    surfaces: Vec<f64>,
     rel_err: Vec<f32>,
     sweeps: u32,
 }
@@ -225,6 +230,39 @@ pub fn run_annual(
     let (mut w_total, done_times) =
         IlluminanceWriter::resume(&out.join("illuminance.csv"), sensors)?;
     let (mut w_sun, done_sun) = IlluminanceWriter::resume(&out.join("direct_sun.csv"), sensors)?;
+    // The interreflection operator (geometry only, cached) is needed before resuming when
+    // surfaces are asked for: its mesh defines their columns.
+    let dirs = Directions::new(scene, quality, store);
+    let needs_radiosity = scene.triangles.iter().any(|t| {
+        let m = &scene.materials[t.material as usize];
+        m.reflectance().max_element() > 0.0 || m.is_emitter()
+    });
+    let mut stage = Stages::default();
+    let ts = Instant::now();
+    let operator = if (needs_radiosity && !scene.sensors.is_empty()) || opts.surfaces {
+        let (t, cached) = super::operator::transport(scene, &quality.transport, store);
+        report.operator_from_cache = cached;
+        Some(t)
+    } else {
+        report.skipped.push(
+            "interreflection: every surface is black and nothing emits, or no sensors".into(),
+        );
+        None
+    };
+    stage.add("operator", ts.elapsed().as_secs_f64());
+    let surface_map = match (&operator, opts.surfaces) {
+        (Some(op), true) => Some(SurfaceMap::new(scene, op)),
+        _ => None,
+    };
+    let surfaces_path = out.join("surfaces.csv");
+    let (mut w_surf, done_surf) = match &surface_map {
+        Some(m) => {
+            let (w, t) =
+                IlluminanceWriter::resume_with_header(&surfaces_path, m.header(), m.columns())?;
+            (Some(w), Some(t))
+        }
+        None => (None, None),
+    };
     // Resume only whole days present in both files, in plan order.
     let mut resumed_days = 0;
     {
@@ -232,7 +270,9 @@ pub fn run_annual(
         for day in &days {
             let ok = day.iter().enumerate().all(|(j, s)| {
                 let t = export::format_time(s.time);
-                done_times.get(i + j) == Some(&t) && done_sun.get(i + j) == Some(&t)
+                done_times.get(i + j) == Some(&t)
+                    && done_sun.get(i + j) == Some(&t)
+                    && done_surf.as_ref().is_none_or(|d| d.get(i + j) == Some(&t))
             });
             if !ok {
                 break;
@@ -240,7 +280,10 @@ pub fn run_annual(
             i += day.len();
             resumed_days += 1;
         }
-        if i != done_times.len() || i != done_sun.len() {
+        if i != done_times.len()
+            || i != done_sun.len()
+            || done_surf.as_ref().is_some_and(|d| d.len() != i)
+        {
             // A cut batch: rewrite the kept prefix.
             let (_, tv) = export::read_illuminance_csv(&IlluminanceWriter::partial_path(
                 &out.join("illuminance.csv"),
@@ -257,31 +300,26 @@ pub fn run_annual(
             }
             w_total.checkpoint()?;
             w_sun.checkpoint()?;
+            if let Some(m) = &surface_map {
+                let (_, fv) =
+                    export::read_illuminance_csv(&IlluminanceWriter::partial_path(&surfaces_path))?;
+                let mut w =
+                    IlluminanceWriter::create_with_header(&surfaces_path, m.header(), m.columns())?;
+                for (j, t) in times.iter().enumerate() {
+                    w.append(*t, &fv[j])?;
+                }
+                w.checkpoint()?;
+                w_surf = Some(w);
+            }
         }
         report.resumed = i;
     }
 
-    let dirs = Directions::new(scene, quality, store);
-    let needs_radiosity = scene.triangles.iter().any(|t| {
-        let m = &scene.materials[t.material as usize];
-        m.reflectance().max_element() > 0.0 || m.is_emitter()
-    });
-    let mut stage = Stages::default();
     let ts = Instant::now();
-    let operator = if needs_radiosity && !scene.sensors.is_empty() {
-        let (t, cached) = super::operator::transport(scene, &quality.transport, store);
-        report.operator_from_cache = cached;
-        Some(t)
-    } else {
-        report.skipped.push(
-            "interreflection: every surface is black and nothing emits, or no sensors".into(),
-        );
-        None
-    };
-    stage.add("operator", ts.elapsed().as_secs_f64());
-    let ts = Instant::now();
+    // Surfaces read the mesh solution, which only forward solves have.
     let response = operator
         .as_ref()
+        .filter(|_| surface_map.is_none())
         .and_then(|op| op.response(opts.response_max_bytes));
     report.interreflection = match (&operator, &response) {
         (None, _) => "none",
@@ -302,6 +340,7 @@ pub fn run_annual(
         dirs: &dirs,
         operator: operator.as_ref(),
         response: response.as_ref(),
+        surfaces: surface_map.as_ref(),
         mesh_memo: &mesh_memo,
         dc_memo: &dc_memo,
         stages: Mutex::new(Stages::default()),
@@ -322,6 +361,9 @@ pub fn run_annual(
             for (s, o) in day.iter().zip(&outs) {
                 w_total.append(s.time, &o.total)?;
                 w_sun.append(s.time, &o.sun)?;
+                if let Some(w) = &mut w_surf {
+                    w.append(s.time, &o.surfaces)?;
+                }
                 report.sweeps += o.sweeps as u64;
                 errs.extend_from_slice(&o.rel_err);
                 if o.total.is_empty() {
@@ -333,6 +375,9 @@ pub fn run_annual(
         }
         w_total.checkpoint()?;
         w_sun.checkpoint()?;
+        if let Some(w) = &mut w_surf {
+            w.checkpoint()?;
+        }
         progress(done, total_steps);
     }
     // Step counts (the plan, so resumed runs report the same).
@@ -369,6 +414,9 @@ pub fn run_annual(
     if !report.interrupted {
         w_total.finish()?;
         w_sun.finish()?;
+        if let Some(w) = w_surf.take() {
+            w.finish()?;
+        }
         if n == 1 {
             let tm = Instant::now();
             write_metrics(out, weather.interval_minutes, &opts.metrics)?;
@@ -390,9 +438,16 @@ pub fn run_annual(
                 .skipped
                 .push("illuminance.ill: not asked for (--ill)".into());
         }
-        report
-            .skipped
-            .push("images and surfaces.csv: not asked for".into());
+        report.skipped.push("images: not asked for".into());
+        if !opts.surfaces {
+            report
+                .skipped
+                .push("surfaces.csv: not asked for (--surfaces)".into());
+        } else if surface_map.is_none() {
+            report
+                .skipped
+                .push("surfaces.csv: the scene has no surfaces to report".into());
+        }
     }
     report.total_seconds = t0.elapsed().as_secs_f64();
     let json = serde_json::to_string_pretty(&report)
@@ -459,8 +514,12 @@ pub fn merge(
     params: &MetricParams,
 ) -> Result<()> {
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
-    for f in ["illuminance.csv", "direct_sun.csv"] {
+    for f in ["illuminance.csv", "direct_sun.csv", "surfaces.csv"] {
         let files: Vec<_> = parts.iter().map(|p| p.join(f)).collect();
+        // surfaces.csv only when the shards were asked for it.
+        if f == "surfaces.csv" && !files.iter().all(|p| p.exists()) {
+            continue;
+        }
         export::merge_illuminance(&files, &out.join(f))?;
     }
     write_metrics(out, step_minutes, params)
@@ -513,6 +572,7 @@ struct Ctx<'a> {
     dirs: &'a Directions<'a>,
     operator: Option<&'a Transport>,
     response: Option<&'a SensorResponse>,
+    surfaces: Option<&'a SurfaceMap>,
     mesh_memo: &'a Memo<MeshWeights>,
     dc_memo: &'a Memo<Arc<DirectionResponse>>,
     stages: Mutex<Stages>,
@@ -554,6 +614,7 @@ impl Ctx<'_> {
         let zeros = || StepOut {
             total: vec![0.0; n],
             sun: vec![0.0; n],
+            surfaces: vec![0.0; self.surfaces.map_or(0, |m| m.columns())],
             ..StepOut::default()
         };
         if !matches!(classify(self.scene, s), Kind::Day { .. }) {
@@ -591,6 +652,7 @@ impl Ctx<'_> {
         let mut out = StepOut {
             total: Vec::with_capacity(n),
             sun: Vec::with_capacity(n),
+            surfaces: Vec::new(),
             rel_err: Vec::with_capacity(n),
             sweeps: 0,
         };
@@ -611,11 +673,22 @@ impl Ctx<'_> {
             (Some(op), None) => {
                 let t = Instant::now();
                 let mut e = vec![Rgb::ZERO; op.rows()];
+                let mut et = vec![
+                    Rgb::ZERO;
+                    if self.surfaces.is_some() {
+                        op.rows()
+                    } else {
+                        0
+                    }
+                ];
                 for (src, d) in sources.iter().zip(&data) {
                     let res = self.quality.projection.resolution_for(src.is_sun());
                     let w = self.mesh_weights(op, src, res, &d.record);
                     for &(row, wt) in w.iter() {
                         e[row as usize] += src.normal_irradiance * wt;
+                    }
+                    if let Some(m) = self.surfaces {
+                        m.add_transmitted(&mut et, src, &w, self.scene);
                     }
                 }
                 st.add("mesh_irradiance", t.elapsed().as_secs_f64());
@@ -623,6 +696,11 @@ impl Ctx<'_> {
                 let (next, rep) = op.solve(&e, state.as_ref());
                 out.sweeps = rep.sweeps;
                 let ind = op.sensors(&next);
+                if let Some(m) = self.surfaces {
+                    let sin_alt = sun.altitude_deg().to_radians().sin();
+                    let k = SurfaceMap::solar_scale(&sources, r.dni, r.dhi, sin_alt);
+                    out.surfaces = m.values(op, Some(&next), &e, &et, k);
+                }
                 *state = Some(next);
                 st.add("interreflection", t.elapsed().as_secs_f64());
                 ind

@@ -8,6 +8,7 @@ pub mod directions;
 pub mod instant;
 pub mod operator;
 pub mod report;
+pub mod surfaces;
 
 pub use config::{Quality, SkySpec};
 pub use df::{run_df, write_df, DfResult, SensorDf};
