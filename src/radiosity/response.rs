@@ -220,17 +220,7 @@ impl SensorResponse {
             .map(|s| {
                 let fine: Vec<Rgb> = (0..parts).map(|p| at(p, 0, s)).collect();
                 let coarse = (0..parts).fold(Rgb::ZERO, |a, p| a + at(p, 1, s)) / n;
-                let mean = fine.iter().fold(Rgb::ZERO, |a, x| a + *x) / n;
-                let var = fine
-                    .iter()
-                    .fold(Rgb::ZERO, |a, x| a + (*x - mean) * (*x - mean))
-                    / (n - 1.0)
-                    / n;
-                TransportSensor {
-                    irradiance: mean,
-                    std_err: super::sqrt3(var),
-                    discretisation: (mean - coarse).abs(),
-                }
+                TransportSensor::from_parts(&fine, coarse)
             })
             .collect()
     }

@@ -655,19 +655,28 @@ impl Transport {
                     .map(|(p, b)| p.g_coarse.row_dot(s, b))
                     .fold(Rgb::ZERO, |a, x| a + x)
                     / n;
-                let mean = fine.iter().fold(Rgb::ZERO, |a, x| a + *x) / n;
-                let var = fine
-                    .iter()
-                    .fold(Rgb::ZERO, |a, x| a + (*x - mean) * (*x - mean))
-                    / (n - 1.0)
-                    / n;
-                TransportSensor {
-                    irradiance: mean,
-                    std_err: super::sqrt3(var),
-                    discretisation: (mean - coarse).abs(),
-                }
+                TransportSensor::from_parts(&fine, coarse)
             })
             .collect()
+    }
+}
+
+impl TransportSensor {
+    /// A sensor's estimate from its per-part fine values and the mean coarse value: mean,
+    /// standard error of the mean over parts, |mean − coarse|.
+    pub(super) fn from_parts(fine: &[Rgb], coarse: Rgb) -> TransportSensor {
+        let n = fine.len() as f64;
+        let mean = fine.iter().fold(Rgb::ZERO, |a, x| a + *x) / n;
+        let var = fine
+            .iter()
+            .fold(Rgb::ZERO, |a, x| a + (*x - mean) * (*x - mean))
+            / (n - 1.0)
+            / n;
+        TransportSensor {
+            irradiance: mean,
+            std_err: super::sqrt3(var),
+            discretisation: (mean - coarse).abs(),
+        }
     }
 }
 
