@@ -8,6 +8,7 @@ mod cache_runs; // the cache in whole runs: warm = cold, Kd/site/weather hit, ve
 mod cli; // the binary end to end: exit codes, messages naming file:line, outputs
 mod extremes; // low sun, polar day and night, turbidity limits, slivers, far coordinates
 mod layers; // the layer rule of lib.rs: lower layers never import higher ones
+mod parsers; // every parser under arbitrary and mutated input: no panic, hang or unbounded allocation
 mod physics; // closed-form daylight: unobstructed skies, roof opening, sun footprint, glazing
 mod radiosity; // HMC interreflection: furnace, configuration factor, Sumpner room, energy, threads
 mod transport; // global-line transport: furnace, configuration factor, closed room, warm = cold, threads
