@@ -9,6 +9,7 @@ mod cli; // the binary end to end: exit codes, messages naming file:line, output
 mod df; // daylight factor: 100 % in the open, the vertical formula, roof-opening sky component, CLI
 mod extremes; // low sun, polar day and night, turbidity limits, slivers, far coordinates
 mod layers; // the layer rule of lib.rs: lower layers never import higher ones
+mod parsers; // every parser under arbitrary and mutated input: no panic, hang or unbounded allocation
 mod physics; // closed-form daylight: unobstructed skies, roof opening, sun footprint, glazing
 mod radiosity; // HMC interreflection: furnace, configuration factor, Sumpner room, energy, threads
 mod transport; // global-line transport: furnace, configuration factor, closed room, warm = cold, threads

@@ -75,7 +75,8 @@ pub struct Scene {
     pub ground_reflectance: f64,
     /// Scene-frame origin in the converted (ENU) model frame, metres: model = scene + origin.
     pub origin: DVec3,
-    /// Number of zero-area input triangles dropped.
+    /// Number of degenerate input triangles dropped (zero area, or an area too small or too
+    /// large for `f64` to give a unit normal).
     pub dropped_degenerate: usize,
     /// Non-fatal remarks about the input (unknown MTL keys, …), each once.
     pub warnings: Vec<String>,
@@ -145,11 +146,12 @@ pub fn y_up_to_z_up(p: DVec3) -> DVec3 {
 impl Scene {
     /// Builds a scene from model-frame input: rotates model north onto true north, moves
     /// the origin to the centre of the bounds (so coordinates far from the origin keep
-    /// precision), drops zero-area triangles (counted) and checks that everything is finite.
+    /// precision), drops degenerate triangles (counted) and checks that everything is finite.
     ///
     /// # Errors
-    /// [`crate::Error::Input`] for non-finite coordinates, a zero sensor direction, a
-    /// material index out of range, or a ground reflectance outside [0, 1).
+    /// [`crate::Error::Input`] for non-finite coordinates (or coordinates so near `f64::MAX`
+    /// that rotating them or moving them to the origin overflows), a zero sensor direction,
+    /// a material index out of range, or a ground reflectance outside [0, 1).
     pub fn from_model(path: &Path, input: ModelInput) -> Result<Scene> {
         use crate::error::Error;
         if !(0.0..1.0).contains(&input.ground_reflectance) {
@@ -171,6 +173,8 @@ impl Scene {
         let (s, c) = input.north_deg.to_radians().sin_cos();
         // Counter-clockwise by north_deg maps the model's north (clockwise from +Y) onto +Y.
         let rot = |p: DVec3| DVec3::new(c * p.x - s * p.y, s * p.x + c * p.y, p.z);
+        // A point as quoted in errors: exponent form stays short even near f64::MAX.
+        let exp = |p: DVec3| format!("{:e} {:e} {:e}", p.x, p.y, p.z);
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
         for (i, t) in input.triangles.iter().enumerate() {
@@ -191,6 +195,14 @@ impl Scene {
                     ));
                 }
                 let w = rot(v);
+                if !w.is_finite() {
+                    return Err(Error::input(
+                        path,
+                        None,
+                        Some(&exp(v)),
+                        format!("triangle {i} has a vertex too far out to rotate by north_deg"),
+                    ));
+                }
                 lo = lo.min(w);
                 hi = hi.max(w);
             }
@@ -198,7 +210,8 @@ impl Scene {
         let origin = if input.triangles.is_empty() {
             DVec3::ZERO
         } else {
-            ((lo + hi) * 0.5).round()
+            // Halves first: `lo + hi` overflows for coordinates beyond f64::MAX / 2.
+            (lo * 0.5 + hi * 0.5).round()
         };
         let mut dropped = 0;
         let triangles: Vec<Triangle> = input
@@ -210,7 +223,8 @@ impl Scene {
                     ..*t
                 };
                 let n = moved.cross();
-                if n.length_squared() > 0.0 && n.is_finite() {
+                // Zero, subnormal or infinite: no exact unit normal (or finite area).
+                if n.length_squared().is_normal() {
                     Some(moved)
                 } else {
                     dropped += 1;
@@ -228,8 +242,21 @@ impl Scene {
                     "sensor needs a finite position and a non-zero finite direction",
                 ));
             }
+            let position = rot(*p) - origin;
+            if !position.is_finite() {
+                return Err(Error::input(
+                    path,
+                    None,
+                    Some(&exp(*p)),
+                    format!(
+                        "sensor {} is too far from the geometry: its position overflows in the \
+                         scene frame",
+                        k + 1
+                    ),
+                ));
+            }
             sensors.push(Sensor {
-                position: rot(*p) - origin,
+                position,
                 normal: rot(*d).normalize(),
                 input_position: *p,
             });

@@ -61,12 +61,15 @@ fn parse(path: &Path, text: &str, y_up: bool) -> Result<Vec<(DVec3, DVec3)>> {
         }
         let mut p = DVec3::new(v[0], v[1], v[2]);
         let mut d = DVec3::new(v[3], v[4], v[5]);
-        if d.length_squared() == 0.0 || !d.length_squared().is_finite() {
+        // A squared length that is zero, subnormal or infinite cannot be normalised exactly
+        // (3e-162 0 0 would become a normal of length 0.95).
+        if !d.length_squared().is_normal() {
             return Err(Error::input(
                 path,
                 Some(line_no),
                 Some(&words[3..].join(" ")),
-                "sensor direction must be non-zero (and not so large that its length overflows)",
+                "sensor direction must be non-zero (and not so small or so large that its \
+                 squared length under- or overflows)",
             ));
         }
         if y_up {

@@ -84,8 +84,9 @@ pub fn parse(path: &Path, text: &str) -> Result<Weather> {
     }
     let period = parse_data_periods(path, lines[7])?;
 
-    // Rows as written, checked field by field.
-    let mut rows = Vec::with_capacity(8784 * period.per_hour as usize);
+    // Rows as written, checked field by field: at most one per line, so the capacity follows
+    // the text, never the data period's claim (60 rows an hour → 50 MB for any file).
+    let mut rows = Vec::with_capacity(lines.len() - 8);
     let mut width = None;
     let mut last_line = 8;
     for (i, raw) in lines.iter().enumerate().skip(8) {
