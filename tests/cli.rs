@@ -176,3 +176,56 @@ fn bad_input_exits_1_naming_the_file_line_and_value() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("--dni"), "{}", stderr(&o));
 }
+
+#[test]
+fn convergence_ladder_writes_csv_plot_and_advice() {
+    // One ladder (the Gauss–Seidel tolerance) on the office at draft quality: the loosest
+    // tolerance must differ more from the finest than the base tolerance does, the finest
+    // rung differs by nothing, and the plot and recommendation are written.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("conv");
+    let o = daystep(&[
+        "convergence",
+        office().to_str().unwrap(),
+        "--time",
+        "2024-03-21T12:00",
+        "--sky",
+        "cie-overcast",
+        "--dhi",
+        "100",
+        "--quality",
+        "draft",
+        "--knobs",
+        "iteration tolerance",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(out.join("convergence.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 4, "{csv}");
+    let rms: Vec<f64> = rows.iter().map(|r| r[3].parse().unwrap()).collect();
+    assert_eq!(rms[3], 0.0);
+    assert!(rms[0] > rms[2], "{rms:?}");
+    assert_eq!(rows.iter().filter(|r| r[7] == "true").count(), 1);
+    let svg = std::fs::read_to_string(out.join("convergence.svg")).unwrap();
+    assert!(svg.contains("iteration tolerance"));
+    assert!(!String::from_utf8_lossy(&o.stdout).trim().is_empty());
+    // An unknown knob is a usage error naming the choices.
+    let o = daystep(&[
+        "convergence",
+        office().to_str().unwrap(),
+        "--weather",
+        office().with_file_name("weather.epw").to_str().unwrap(),
+        "--knobs",
+        "colour",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("sun snapping"), "{}", stderr(&o));
+}

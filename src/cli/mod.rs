@@ -83,6 +83,9 @@ pub enum Command {
     },
     /// Daylight factor at every sensor under the CIE overcast sky: df.csv, report.json.
     Df(DfArgs),
+    /// Error against run time of every quality knob on one instant of the scene:
+    /// convergence.csv, convergence.svg, and a recommendation.
+    Convergence(ConvergenceArgs),
     /// A time series over a weather file (EPW or WEA): illuminance.csv, direct_sun.csv,
     /// metrics.csv, summary.json, report.json.
     Annual(AnnualArgs),
@@ -128,6 +131,56 @@ pub struct DfArgs {
     #[arg(long)]
     pub no_cache: bool,
     /// Seed of the Monte Carlo interreflection (results are a pure function of it).
+    #[arg(long)]
+    pub seed: Option<u64>,
+}
+
+/// Arguments of `daystep convergence`.
+#[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub struct ConvergenceArgs {
+    /// The scene file (scene.toml); it must name a sensors file.
+    pub scene: PathBuf,
+    /// Output folder (convergence.csv, convergence.svg, report.json).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Local standard time, as for `instant` (with `--sky`), or a weather file's date.
+    #[arg(long)]
+    pub time: Option<String>,
+    /// Sky model, as for `instant`.
+    #[arg(long, value_enum)]
+    pub sky: Option<SkyArg>,
+    /// Direct-normal irradiance, W/m² (perez, cie).
+    #[arg(long)]
+    pub dni: Option<f64>,
+    /// Diffuse-horizontal irradiance, W/m².
+    #[arg(long)]
+    pub dhi: Option<f64>,
+    /// CIE general sky type, 1..15.
+    #[arg(long = "type")]
+    pub sky_type: Option<u8>,
+    /// Preetham turbidity.
+    #[arg(long)]
+    pub turbidity: Option<f64>,
+    /// Dew point for the Perez luminous efficacy, °C.
+    #[arg(long)]
+    pub dew_point: Option<f64>,
+    /// Instead of --time/--sky: the weather file's sunniest record (largest beam on the
+    /// horizontal) is the instant studied.
+    #[arg(long, conflicts_with_all = ["time", "sky"])]
+    pub weather: Option<PathBuf>,
+    /// The preset the ladders vary one knob of.
+    #[arg(long, default_value = "default")]
+    pub quality: String,
+    /// Only these knobs, comma-separated (default: all): sky subdivision, sun snapping, LDI
+    /// resolution, refinement thresholds, sensor visibility, interreflection lines,
+    /// iteration tolerance, presets.
+    #[arg(long)]
+    pub knobs: Option<String>,
+    /// Relative RMS error the recommendation aims at, percent.
+    #[arg(long, default_value_t = 2.0)]
+    pub target: f64,
+    /// Seed of the interreflection.
     #[arg(long)]
     pub seed: Option<u64>,
 }
@@ -416,6 +469,131 @@ fn run_df(a: DfArgs) -> Result<()> {
     Ok(())
 }
 
+fn run_convergence(a: ConvergenceArgs) -> Result<()> {
+    use crate::sequence::convergence;
+    let base = quality_arg(&a.quality, a.seed)?;
+    if !(a.target > 0.0 && a.target < 100.0) {
+        return Err(Error::arg("--target", a.target, "a percentage in (0, 100)"));
+    }
+    let scene = Scene::load(&a.scene)?;
+    if scene.sensors.is_empty() {
+        return Err(Error::input(
+            &a.scene,
+            None,
+            None::<&str>,
+            "the scene has no sensors: convergence measures sensor illuminance",
+        ));
+    }
+    let (utc, local, spec, what) = match (&a.weather, &a.time, a.sky) {
+        (Some(w), _, _) => {
+            let weather = crate::weather::read_weather(w)?;
+            let best = weather
+                .records
+                .iter()
+                .filter(|r| !r.missing)
+                .map(|r| {
+                    let offset = (scene.site.utc_offset_h * 3600.0) as i64;
+                    let utc = (r.time - chrono::TimeDelta::seconds(offset)).and_utc();
+                    let sun = crate::site::solar_position::solar_position(utc, &scene.site);
+                    let beam = r.dni * sun.altitude_deg().to_radians().sin().max(0.0);
+                    (beam + r.dhi, r, utc)
+                })
+                .max_by(|a, b| a.0.total_cmp(&b.0))
+                .ok_or_else(|| Error::input(w, None, None::<&str>, "no usable weather record"))?;
+            let (_, r, utc) = best;
+            let spec = SkySpec::Perez {
+                dni: r.dni,
+                dhi: r.dhi,
+                dew_point_c: r.dew_point_c,
+            };
+            let what = format!(
+                "{} line {}: {} (DNI {} W/m², DHI {} W/m²)",
+                w.display(),
+                r.line,
+                r.time,
+                r.dni,
+                r.dhi
+            );
+            (utc, r.time, spec, what)
+        }
+        (None, Some(t), Some(sky)) => {
+            let spec = sky_spec(sky, a.dni, a.dhi, a.sky_type, a.turbidity, a.dew_point)?;
+            let (utc, local) = crate::site::parse_time(t, scene.site.utc_offset_h)?;
+            let what = format!("{t}, {spec:?}");
+            (utc, local, spec, what)
+        }
+        _ => {
+            return Err(Error::arg(
+                "--time/--sky",
+                "(missing)",
+                "give --time and --sky (as for `instant`), or --weather FILE",
+            ))
+        }
+    };
+    eprintln!("daystep convergence: {what}");
+    let mut ladders = convergence::ladders(&base);
+    if let Some(list) = &a.knobs {
+        let want: Vec<&str> = list.split(',').map(str::trim).collect();
+        let known: Vec<&str> = ladders.iter().map(|l| l.knob).collect();
+        if let Some(bad) = want.iter().find(|w| !known.contains(w)) {
+            return Err(Error::arg(
+                "--knobs",
+                bad,
+                format!("unknown knob; choose from: {}", known.join(", ")),
+            ));
+        }
+        ladders.retain(|l| want.contains(&l.knob));
+    }
+    let show = |done: usize, total: usize, knob: &str, setting: &str| {
+        if !knob.is_empty() {
+            eprintln!("  [{:>2}/{total}] {knob}: {setting}", done + 1);
+        }
+    };
+    let rungs = convergence::run_convergence(&scene, utc, local, &spec, &ladders, &show)?;
+    std::fs::create_dir_all(&a.out).map_err(|e| Error::io(&a.out, e))?;
+    crate::files::write_atomic(
+        &a.out.join("convergence.csv"),
+        convergence::csv(&rungs).as_bytes(),
+    )?;
+    let mut curves: Vec<crate::export::plot::Curve> = Vec::new();
+    for r in &rungs {
+        if curves.last().is_none_or(|c| c.name != r.knob) {
+            curves.push(crate::export::plot::Curve {
+                name: r.knob.clone(),
+                points: Vec::new(),
+            });
+        }
+        if let Some(c) = curves.last_mut() {
+            c.points.push((r.seconds, r.rms_rel_err, r.is_base));
+        }
+    }
+    let title = format!(
+        "{}: error against time per knob (base `{}`, ringed)",
+        a.scene.display(),
+        base.name
+    );
+    crate::export::plot::error_vs_time_svg(&a.out.join("convergence.svg"), &title, &curves)?;
+    let advice = convergence::recommendation(&rungs, a.target / 100.0);
+    let report = serde_json::json!({
+        "version": env!("CARGO_PKG_VERSION"),
+        "scene": a.scene.display().to_string(),
+        "instant": what,
+        "base": base.name,
+        "target_rel_err": a.target / 100.0,
+        "rungs": rungs,
+        "recommendation": advice,
+    });
+    crate::files::write_atomic(
+        &a.out.join("report.json"),
+        serde_json::to_string_pretty(&report)
+            .map_err(|e| Error::Internal(format!("report: {e}")))?
+            .as_bytes(),
+    )?;
+    println!("{advice}");
+    eprintln!("wrote {}", a.out.display());
+    Ok(())
+}
+
 fn parse_date(flag: &str, v: &str) -> Result<chrono::NaiveDate> {
     chrono::NaiveDate::parse_from_str(v, "%Y-%m-%d")
         .map_err(|_| Error::arg(flag, v, "expected a date YYYY-MM-DD"))
@@ -565,6 +743,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Cache { action } => run_cache(action),
         Command::Annual(a) => run_annual(a),
         Command::Df(a) => run_df(a),
+        Command::Convergence(a) => run_convergence(a),
         Command::Merge {
             parts,
             out,

@@ -10,6 +10,8 @@
 //! gives the same guarantee (a complete-looking file is complete) without holding a year of
 //! rows in memory.
 
+pub mod plot;
+
 use crate::error::{Error, Result};
 use crate::files;
 use crate::metrics::{MetricParams, SensorMetrics, Summary};

@@ -3,6 +3,7 @@
 
 pub mod annual;
 pub mod config;
+pub mod convergence;
 pub mod df;
 pub mod directions;
 pub mod instant;

@@ -1,0 +1,393 @@
+//! Error against run time on the user's own scene (`daystep convergence`): for every knob
+//! that trades accuracy for time, a ladder of settings from coarse to fine with every other
+//! knob at the base preset; each rung is one cold instant (no cache) and its error is
+//! measured against the ladder's finest rung. One more ladder runs the presets themselves
+//! against `reference`.
+//!
+//! Error measure, per rung: over the sensors the finest rung lights (≥ 10 lx and ≥ 1 % of
+//! its brightest sensor), the RMS and the largest relative difference to the finest rung;
+//! next to them the median stated relative error (`lux_err / lux`) and the fraction of those
+//! sensors whose difference the two runs' stated errors cover. A ladder's finest rung is not
+//! converged either, so a rung's error is the part its knob contributes, not its total.
+
+use super::config::{Quality, SkySpec};
+use super::instant::run_instant;
+use crate::error::Result;
+use crate::scene::Scene;
+use chrono::{DateTime, NaiveDateTime, Utc};
+use serde::Serialize;
+use std::time::Instant;
+
+/// One rung of one ladder.
+#[derive(Clone, Debug, Serialize)]
+pub struct Rung {
+    /// Knob name (`presets` for the preset ladder).
+    pub knob: String,
+    /// The knob's setting, as written in `convergence.csv`.
+    pub setting: String,
+    /// Wall time of the cold instant, s.
+    pub seconds: f64,
+    /// RMS relative difference to the ladder's finest rung (0 for that rung).
+    pub rms_rel_err: f64,
+    /// Largest relative difference to the finest rung.
+    pub max_rel_err: f64,
+    /// Median over the lit sensors of the rung's stated `lux_err / lux`.
+    pub stated_rel_err: f64,
+    /// Fraction of lit sensors whose difference lies within both runs' `lux_err`.
+    pub covered: f64,
+    /// Whether this rung has the base preset's setting of its knob.
+    pub is_base: bool,
+}
+
+/// A knob's ladder: settings from coarse to fine, each a whole [`Quality`].
+pub struct Ladder {
+    /// Knob name.
+    pub knob: &'static str,
+    /// (setting label, quality, is the base setting).
+    pub rungs: Vec<(String, Quality, bool)>,
+}
+
+/// The ladders around `base` (every knob the presets set; see the module doc).
+pub fn ladders(base: &Quality) -> Vec<Ladder> {
+    let p = |n: &str| Quality::preset(n).expect("preset exists");
+    let names = ["draft", "default", "high", "reference"];
+    let mut out = Vec::new();
+    let mut ladder = |knob: &'static str, rungs: Vec<(String, Quality)>| {
+        let rungs = rungs
+            .into_iter()
+            .map(|(s, q)| {
+                let is_base = q == *base;
+                (s, q, is_base)
+            })
+            .collect();
+        out.push(Ladder { knob, rungs });
+    };
+    ladder(
+        "sky subdivision",
+        names
+            .iter()
+            .map(|n| {
+                (
+                    format!("{n} sky"),
+                    Quality {
+                        sky: p(n).sky,
+                        ..*base
+                    },
+                )
+            })
+            .collect(),
+    );
+    ladder(
+        "sun snapping",
+        [2.0, 1.0, 0.5, 0.25, 0.1, 0.05]
+            .iter()
+            .map(|&d| {
+                (
+                    format!("{d} deg"),
+                    Quality {
+                        sun_spacing_deg: d,
+                        ..*base
+                    },
+                )
+            })
+            .collect(),
+    );
+    ladder(
+        "LDI resolution",
+        [256u32, 512, 1024, 2048, 4096]
+            .iter()
+            .map(|&r| {
+                let mut q = *base;
+                q.projection.max_resolution = r;
+                q.projection.min_resolution = base.projection.min_resolution.min(r / 4);
+                (format!("{r} px"), q)
+            })
+            .collect(),
+    );
+    ladder(
+        "refinement thresholds",
+        [
+            (0.2, 4.0),
+            (0.1, 2.0),
+            (0.05, 1.0),
+            (0.02, 0.5),
+            (0.01, 0.25),
+        ]
+        .iter()
+        .map(|&(v, a)| {
+            let mut q = *base;
+            // The base's own thresholds keep their exact values (so it is recognised).
+            if v != 0.05 {
+                q.projection.v_min = v;
+                q.projection.v_max = 1.0 - v;
+                q.projection.min_area_m2 = base.projection.min_area_m2 * a;
+            }
+            (
+                format!(
+                    "VR {}..{}, {:.3} m2",
+                    q.projection.v_min, q.projection.v_max, q.projection.min_area_m2
+                ),
+                q,
+            )
+        })
+        .collect(),
+    );
+    ladder(
+        "sensor visibility",
+        names
+            .iter()
+            .map(|n| {
+                (
+                    format!("{n} gather"),
+                    Quality {
+                        sensors: p(n).sensors,
+                        ..*base
+                    },
+                )
+            })
+            .collect(),
+    );
+    ladder(
+        "interreflection lines",
+        [64u32, 256, 1024, 4096, 8192]
+            .iter()
+            .map(|&d| {
+                let mut q = *base;
+                q.transport.directions = d;
+                (format!("{d} directions"), q)
+            })
+            .collect(),
+    );
+    ladder(
+        "iteration tolerance",
+        [1e-1, 1e-2, 1e-3, 1e-4]
+            .iter()
+            .map(|&t| {
+                let mut q = *base;
+                q.transport.tolerance = t;
+                (format!("{t:e}"), q)
+            })
+            .collect(),
+    );
+    ladder(
+        "presets",
+        names
+            .iter()
+            .map(|n| (n.to_string(), p(n).with_seed(base.transport.seed)))
+            .collect(),
+    );
+    out
+}
+
+/// Relative-error statistics of `x` against the finest rung `r` (lux and lux_err each).
+fn compare(x: &[(f64, f64)], r: &[(f64, f64)]) -> (f64, f64, f64, f64) {
+    let max_ref = r.iter().map(|v| v.0).fold(0.0, f64::max);
+    let floor = (0.01 * max_ref).max(10.0);
+    let (mut sq, mut worst, mut n, mut covered) = (0.0, 0.0f64, 0usize, 0usize);
+    let mut stated = Vec::new();
+    for (a, b) in x.iter().zip(r) {
+        if b.0 < floor {
+            continue;
+        }
+        let d = (a.0 - b.0).abs();
+        sq += (d / b.0).powi(2);
+        worst = worst.max(d / b.0);
+        n += 1;
+        covered += usize::from(d <= a.1 + b.1);
+        if a.0 > 0.0 {
+            stated.push(a.1 / a.0);
+        }
+    }
+    stated.sort_by(f64::total_cmp);
+    let median = stated.get(stated.len() / 2).copied().unwrap_or(0.0);
+    if n == 0 {
+        return (0.0, 0.0, median, 1.0);
+    }
+    (
+        (sq / n as f64).sqrt(),
+        worst,
+        median,
+        covered as f64 / n as f64,
+    )
+}
+
+/// Runs every rung of `ladders` on one instant and measures each against its ladder's
+/// finest rung. `progress(done, total, knob, setting)` is called before each rung.
+///
+/// # Errors
+/// Bad time or sky parameters (as [`run_instant`]).
+pub fn run_convergence(
+    scene: &Scene,
+    utc: DateTime<Utc>,
+    local: NaiveDateTime,
+    spec: &SkySpec,
+    ladders: &[Ladder],
+    progress: &dyn Fn(usize, usize, &str, &str),
+) -> Result<Vec<Rung>> {
+    let total: usize = ladders.iter().map(|l| l.rungs.len()).sum();
+    let mut done = 0;
+    let mut out = Vec::new();
+    for l in ladders {
+        let mut runs = Vec::new();
+        for (setting, q, _) in &l.rungs {
+            progress(done, total, l.knob, setting);
+            let t0 = Instant::now();
+            let r = run_instant(scene, utc, local, spec, q)?;
+            let secs = t0.elapsed().as_secs_f64();
+            let v: Vec<(f64, f64)> = r.sensors.iter().map(|s| (s.lux, s.lux_err)).collect();
+            runs.push((secs, v));
+            done += 1;
+        }
+        let finest = runs.last().map(|r| r.1.clone()).unwrap_or_default();
+        for ((setting, _, is_base), (secs, v)) in l.rungs.iter().zip(&runs) {
+            let (rms, max, stated, covered) = compare(v, &finest);
+            out.push(Rung {
+                knob: l.knob.into(),
+                setting: setting.clone(),
+                seconds: *secs,
+                rms_rel_err: rms,
+                max_rel_err: max,
+                stated_rel_err: stated,
+                covered,
+                is_base: *is_base,
+            });
+        }
+    }
+    progress(done, total, "", "");
+    Ok(out)
+}
+
+/// `convergence.csv`: `knob,setting,seconds,rms_rel_err,max_rel_err,stated_rel_err,covered,base`.
+pub fn csv(rungs: &[Rung]) -> String {
+    let mut s =
+        String::from("knob,setting,seconds,rms_rel_err,max_rel_err,stated_rel_err,covered,base\n");
+    for r in rungs {
+        s.push_str(&format!(
+            "{},{},{:.4},{:.6},{:.6},{:.6},{:.4},{}\n",
+            r.knob,
+            r.setting.replace(',', ";"),
+            r.seconds,
+            r.rms_rel_err,
+            r.max_rel_err,
+            r.stated_rel_err,
+            r.covered,
+            r.is_base
+        ));
+    }
+    s
+}
+
+/// A paragraph for the terminal: which knob limits the base preset, the cheapest rung of
+/// each knob within `target` (relative RMS), and the cheapest preset within it.
+pub fn recommendation(rungs: &[Rung], target: f64) -> String {
+    let mut knobs: Vec<&str> = Vec::new();
+    for r in rungs {
+        if !knobs.contains(&r.knob.as_str()) {
+            knobs.push(&r.knob);
+        }
+    }
+    let mut worst: Option<&Rung> = None;
+    let mut lines = Vec::new();
+    for k in knobs.iter().filter(|k| **k != "presets") {
+        let ladder: Vec<&Rung> = rungs.iter().filter(|r| r.knob == *k).collect();
+        if let Some(b) = ladder.iter().find(|r| r.is_base) {
+            if worst.is_none_or(|w| b.rms_rel_err > w.rms_rel_err) {
+                worst = Some(b);
+            }
+        }
+        let cheapest = ladder
+            .iter()
+            .filter(|r| r.rms_rel_err <= target)
+            .min_by(|a, b| a.seconds.total_cmp(&b.seconds));
+        if let Some(c) = cheapest {
+            lines.push(format!("{k}: {} ({:.1} s)", c.setting, c.seconds));
+        }
+    }
+    let mut s = String::new();
+    if let Some(w) = worst {
+        s.push_str(&format!(
+            "The base preset's error is dominated by {} ({}: {:.1} % RMS against its finest setting); refine that knob first. ",
+            w.knob,
+            w.setting,
+            100.0 * w.rms_rel_err
+        ));
+    }
+    if !lines.is_empty() {
+        s.push_str(&format!(
+            "Cheapest setting within {:.1} % per knob: {}. ",
+            100.0 * target,
+            lines.join("; ")
+        ));
+    }
+    let presets: Vec<&Rung> = rungs.iter().filter(|r| r.knob == "presets").collect();
+    if let Some(p) = presets
+        .iter()
+        .filter(|r| r.rms_rel_err <= target)
+        .min_by(|a, b| a.seconds.total_cmp(&b.seconds))
+    {
+        s.push_str(&format!(
+            "Of the presets, `{}` is the cheapest within {:.1} % of `reference` ({:.1} % RMS, {:.1} s; stated error {:.1} %, covering {:.0} % of sensors).",
+            p.setting,
+            100.0 * target,
+            100.0 * p.rms_rel_err,
+            p.seconds,
+            100.0 * p.stated_rel_err,
+            100.0 * p.covered
+        ));
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn errors_are_relative_to_the_finest_rung_over_lit_sensors() {
+        let finest = [(1000.0, 10.0), (500.0, 5.0), (1.0, 0.1)];
+        let x = [(1010.0, 5.0), (450.0, 60.0), (100.0, 0.0)];
+        let (rms, max, stated, covered) = compare(&x, &finest);
+        // The 1 lx sensor is below the floor and ignored.
+        let expect = ((0.01f64.powi(2) + 0.1f64.powi(2)) / 2.0).sqrt();
+        assert!((rms - expect).abs() < 1e-12);
+        assert!((max - 0.1).abs() < 1e-12);
+        // Both differences are covered: 10 ≤ 5 + 10 and 50 ≤ 60 + 5.
+        assert_eq!(covered, 1.0);
+        assert!((stated - 60.0 / 450.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn every_ladder_runs_coarse_to_fine_and_marks_the_base() {
+        let base = Quality::default();
+        for l in ladders(&base) {
+            assert!(l.rungs.len() >= 4, "{}", l.knob);
+            let n_base = l.rungs.iter().filter(|r| r.2).count();
+            assert_eq!(n_base, 1, "{} has {n_base} base rungs", l.knob);
+        }
+    }
+
+    #[test]
+    fn recommendation_names_the_dominant_knob_and_the_cheapest_preset() {
+        let r = |knob: &str, setting: &str, s: f64, e: f64, base: bool| Rung {
+            knob: knob.into(),
+            setting: setting.into(),
+            seconds: s,
+            rms_rel_err: e,
+            max_rel_err: e,
+            stated_rel_err: e,
+            covered: 1.0,
+            is_base: base,
+        };
+        let rungs = [
+            r("sky subdivision", "default sky", 1.0, 0.004, true),
+            r("interreflection lines", "256 directions", 0.5, 0.05, false),
+            r("interreflection lines", "1024 directions", 1.0, 0.015, true),
+            r("presets", "draft", 0.5, 0.03, false),
+            r("presets", "default", 1.0, 0.012, true),
+            r("presets", "reference", 9.0, 0.0, false),
+        ];
+        let s = recommendation(&rungs, 0.02);
+        assert!(s.contains("dominated by interreflection lines"), "{s}");
+        assert!(s.contains("`default` is the cheapest"), "{s}");
+    }
+}
