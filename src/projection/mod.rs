@@ -21,7 +21,7 @@ pub struct ProjectionParams {
     pub max_resolution: u32,
     /// Lower bound of the resolution for dim sources.
     pub min_resolution: u32,
-    /// Refine a patch when `v_min < VR < v_max` (paper: 0.05, 0.95).
+    /// Refine a patch when `v_min < VR < v_max` (paper: 0.05, 0.95; ours 0.02, 0.98).
     pub v_min: f64,
     /// See `v_min`.
     pub v_max: f64,
@@ -36,8 +36,11 @@ impl Default for ProjectionParams {
         ProjectionParams {
             max_resolution: 1024,
             min_resolution: 64,
-            v_min: 0.05,
-            v_max: 0.95,
+            // The paper's 0.05 / 0.95 left the office's sun patch 4.4 % RMS from converged
+            // (`daystep convergence`, README presets); 0.02 / 0.98 brings it to 0.45 % at
+            // no measurable extra time.
+            v_min: 0.02,
+            v_max: 0.98,
             min_area_m2: 1e-3,
             max_depth: 10,
         }

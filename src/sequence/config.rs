@@ -152,6 +152,9 @@ impl Quality {
                 projection: ProjectionParams {
                     max_resolution: 2048,
                     min_resolution: 128,
+                    v_min: 0.01,
+                    v_max: 0.99,
+                    min_area_m2: 5e-4,
                     ..base.projection
                 },
                 sensors: SensorParams {
@@ -186,6 +189,9 @@ impl Quality {
                 projection: ProjectionParams {
                     max_resolution: 4096,
                     min_resolution: 256,
+                    v_min: 0.005,
+                    v_max: 0.995,
+                    min_area_m2: 2.5e-4,
                     ..base.projection
                 },
                 sensors: SensorParams {

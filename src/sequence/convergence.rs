@@ -106,31 +106,25 @@ pub fn ladders(base: &Quality) -> Vec<Ladder> {
     );
     ladder(
         "refinement thresholds",
-        [
-            (0.2, 4.0),
-            (0.1, 2.0),
-            (0.05, 1.0),
-            (0.02, 0.5),
-            (0.01, 0.25),
-        ]
-        .iter()
-        .map(|&(v, a)| {
-            let mut q = *base;
-            // The base's own thresholds keep their exact values (so it is recognised).
-            if v != 0.05 {
-                q.projection.v_min = v;
-                q.projection.v_max = 1.0 - v;
-                q.projection.min_area_m2 = base.projection.min_area_m2 * a;
-            }
-            (
-                format!(
-                    "VR {}..{}, {:.3} m2",
-                    q.projection.v_min, q.projection.v_max, q.projection.min_area_m2
-                ),
-                q,
-            )
-        })
-        .collect(),
+        [4.0, 2.0, 1.0, 0.5, 0.25]
+            .iter()
+            .map(|&k| {
+                let mut q = *base;
+                // Scaled around the base (k = 1 keeps its exact values, so it is recognised).
+                if k != 1.0 {
+                    q.projection.v_min = base.projection.v_min * k;
+                    q.projection.v_max = 1.0 - q.projection.v_min;
+                    q.projection.min_area_m2 = base.projection.min_area_m2 * k;
+                }
+                (
+                    format!(
+                        "VR {}..{} {:.2e} m2",
+                        q.projection.v_min, q.projection.v_max, q.projection.min_area_m2
+                    ),
+                    q,
+                )
+            })
+            .collect(),
     );
     ladder(
         "sensor visibility",
