@@ -555,18 +555,7 @@ fn run_convergence(a: ConvergenceArgs) -> Result<()> {
         &a.out.join("convergence.csv"),
         convergence::csv(&rungs).as_bytes(),
     )?;
-    let mut curves: Vec<crate::export::plot::Curve> = Vec::new();
-    for r in &rungs {
-        if curves.last().is_none_or(|c| c.name != r.knob) {
-            curves.push(crate::export::plot::Curve {
-                name: r.knob.clone(),
-                points: Vec::new(),
-            });
-        }
-        if let Some(c) = curves.last_mut() {
-            c.points.push((r.seconds, r.rms_rel_err, r.is_base));
-        }
-    }
+    let curves = convergence::curves(&rungs);
     let title = format!(
         "{}: error against time per knob (base `{}`, ringed)",
         a.scene.display(),

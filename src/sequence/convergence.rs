@@ -13,6 +13,7 @@
 use super::config::{Quality, SkySpec};
 use super::instant::run_instant;
 use crate::error::Result;
+use crate::export::plot::Curve;
 use crate::scene::Scene;
 use chrono::{DateTime, NaiveDateTime, Utc};
 use serde::Serialize;
@@ -249,6 +250,23 @@ pub fn run_convergence(
     }
     progress(done, total, "", "");
     Ok(out)
+}
+
+/// The plot's curves: one per knob, (seconds, RMS relative error, base) per rung.
+pub fn curves(rungs: &[Rung]) -> Vec<Curve> {
+    let mut out: Vec<Curve> = Vec::new();
+    for r in rungs {
+        if out.last().is_none_or(|c| c.name != r.knob) {
+            out.push(Curve {
+                name: r.knob.clone(),
+                points: Vec::new(),
+            });
+        }
+        if let Some(c) = out.last_mut() {
+            c.points.push((r.seconds, r.rms_rel_err, r.is_base));
+        }
+    }
+    out
 }
 
 /// `convergence.csv`: `knob,setting,seconds,rms_rel_err,max_rel_err,stated_rel_err,covered,base`.
