@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Validation bench: daystep against Radiance on the sample office (scenes/office).
+#
+# Run from anywhere (it changes to the repository root itself):
+#
+#     tests/bench/radiance/run.sh            # the two instants (about 15 minutes on 2 cores)
+#     tests/bench/radiance/run.sh --quick    # small reference (~8 min): checks the bench, validates nothing
+#     tests/bench/radiance/run.sh --only perez
+#     tests/bench/radiance/run.sh --annual   # adds a year, Radiance 2-phase vs daystep annual (~6 min)
+#
+# It DOWNLOADS pyradiance from PyPI (the first time): a virtual environment is made in
+# target/radiance-venv and `pip install pyradiance` puts the Radiance suite there (the
+# wheel ships rtrace, rcontrib, gendaylit, gensky, gendaymtx, dctimestep, … and their lib
+# folder; validate.py sets PATH and RAYPATH to them). Then it builds daystep
+# (`cargo build --release`) and runs validate.py with the venv's Python, which prints
+# markdown tables; its scratch files go to target/radiance-bench.
+#
+# Not part of `cargo test` or CI. Needs python3 (with venv) and a Rust toolchain; the
+# binary wheel used here was pyradiance 1.3.1 for CPython 3.11, manylinux x86_64.
+set -euo pipefail
+
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+root="$(cd "$here/../../.." && pwd)"
+cd "$root"
+
+venv="$root/target/radiance-venv"
+if [[ ! -x "$venv/bin/python" ]]; then
+    echo "making $venv" >&2
+    python3 -m venv "$venv"
+fi
+if ! "$venv/bin/python" -c "import pyradiance" 2>/dev/null; then
+    echo "installing pyradiance into $venv (download from PyPI)" >&2
+    "$venv/bin/python" -m pip install --quiet --upgrade pip
+    "$venv/bin/python" -m pip install --quiet "pyradiance>=1.3"
+fi
+
+cargo build --release --quiet
+
+exec "$venv/bin/python" "$here/validate.py" --daystep "$root/target/release/daystep" "$@"
