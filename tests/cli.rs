@@ -1,22 +1,7 @@
 //! The binary end to end: outputs, exit codes, and messages that name file, line and value.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn daystep(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_daystep"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn office() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office/scene.toml")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use crate::util::{daystep, office, stderr};
+use std::path::Path;
 
 #[test]
 fn instant_on_the_sample_office_writes_sensors_and_report() {

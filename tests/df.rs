@@ -9,8 +9,6 @@ use daystep::sequence::df::{run_df, DF_DHI_W_M2};
 use daystep::sequence::Quality;
 use glam::DVec3;
 use std::f64::consts::PI;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 fn draft() -> Quality {
     Quality::preset("draft").unwrap()
@@ -97,21 +95,6 @@ fn roof_opening_gives_the_overcast_sky_component() {
         r.inside[0]
     );
     assert!(r.report.instant.skipped.iter().any(|s| s.contains("black")));
-}
-
-fn daystep(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_daystep"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn office() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office/scene.toml")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 #[test]

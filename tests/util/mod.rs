@@ -158,3 +158,21 @@ pub fn f_parallel(a: f64, b: f64, h: f64) -> f64 {
     let sy = (1.0 + y * y).sqrt();
     (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * std::f64::consts::PI)
 }
+
+/// Runs the daystep binary with `args`.
+pub fn daystep(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_daystep"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+/// The sample office's scene file.
+pub fn office() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office/scene.toml")
+}
+
+/// A finished process's standard error, as text.
+pub fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
