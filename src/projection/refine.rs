@@ -81,9 +81,10 @@ fn refine_triangle(
             point_transmission(ldi, tri, &v)
         } else {
             let vr = c.n_v as f64 / c.n_p as f64;
+            let partial = vr > params.v_min && vr < params.v_max
+                || (c.n_v > 0 && c.n_v < c.n_p && area > params.partial_area_m2);
             let refine = !glazing
-                && vr > params.v_min
-                && vr < params.v_max
+                && partial
                 && area > params.min_area_m2
                 && area * cos > pixel_area
                 && key.depth() < max_depth;

@@ -192,6 +192,8 @@ impl Quality {
                     v_min: 0.005,
                     v_max: 0.995,
                     min_area_m2: 2.5e-4,
+                    // As fine as this preset's interreflection mesh.
+                    partial_area_m2: 0.1,
                     ..base.projection
                 },
                 sensors: SensorParams {

@@ -157,9 +157,22 @@ def radname(name):
     return "m_" + "".join(ch if ch.isalnum() or ch in "_-." else "_" for ch in name)
 
 
-def write_radiance_scene(tris, mats, path, black=False):
+NONREFLECTING_CAL = """{ Radiance glass's transmittance without its reflection (daystep's glazing model):
+  the glass.c formula for refractive index 1.52 and transmissivity tn at cos = |Rdot|. }
+gn = 1.52;
+gci = max(abs(Rdot), 1e-6);
+gct = sqrt(1 - (1 - gci*gci)/(gn*gn));
+gre = sq((gci - gn*gct)/(gci + gn*gct));
+grm = sq((1/gci - gn/gct)/(1/gci + gn/gct));
+gtau(tn) = .5*sq(1-gre)*tn^(1/gct)/(1-gre*gre*tn^(2/gct))
+         + .5*sq(1-grm)*tn^(1/gct)/(1-grm*grm*tn^(2/gct));
+"""
+
+
+def write_radiance_scene(tris, mats, path, black=False, glazing="glass"):
     """Materials and polygons. black=True: every opaque surface reflects nothing (glass and
-    light stay), for the direct-only runs."""
+    light stay), for the direct-only runs. glazing="nonreflecting": panes are a BRTDfunc
+    with glass's angular transmittance and no reflection, which is daystep's model."""
     used = sorted({t[3] for t in tris})
     lines = ["# converted from the daystep scene by tests/bench/radiance/validate.py"]
     for name in used:
@@ -169,7 +182,14 @@ def write_radiance_scene(tris, mats, path, black=False):
             lines.append(f"void light {rn}\n0\n0\n3 {m['ke'][0]} {m['ke'][1]} {m['ke'][2]}")
         elif max(m["tf"]) > 0:
             t = [glass_transmissivity(v) for v in m["tf"]]
-            lines.append(f"void glass {rn}\n0\n0\n3 {t[0]:.6f} {t[1]:.6f} {t[2]:.6f}")
+            if glazing == "nonreflecting":
+                cal = path.parent / "nonreflecting.cal"
+                cal.write_text(NONREFLECTING_CAL)
+                tr = " ".join(f"gtau({v:.6f})" for v in t)
+                lines.append(f"void BRTDfunc {rn}\n10 0 0 0 {tr} 0 0 0 {cal}\n0\n"
+                             "9 0 0 0 0 0 0 0 0 0")
+            else:
+                lines.append(f"void glass {rn}\n0\n0\n3 {t[0]:.6f} {t[1]:.6f} {t[2]:.6f}")
         else:
             kd = (0.0, 0.0, 0.0) if black else m["kd"]
             lines.append(f"void plastic {rn}\n0\n0\n5 {kd[0]} {kd[1]} {kd[2]} 0 0")
@@ -441,6 +461,10 @@ def main():
     ap.add_argument("--weather", default=str(REPO / "scenes/office/weather.epw"),
                     help="weather file of the --annual study (EPW)")
     ap.add_argument("--no-instants", action="store_true", help="skip the instants")
+    ap.add_argument("--glazing", choices=["glass", "nonreflecting"], default="glass",
+                    help="Radiance panes: glass (reflects 8 %% at normal incidence, more "
+                         "at grazing) or a BRTDfunc with glass's transmittance and no "
+                         "reflection, as daystep models glazing")
     a = ap.parse_args()
 
     env, bindir, libdir = radiance_env()
@@ -468,8 +492,8 @@ def main():
     lat, lon, tz = float(site["latitude"]), float(site["longitude"]), float(site["utc_offset_h"])
     tris, mats = read_obj(scene_path.parent / sc["geometry"], up, north)
     sensors = read_pts(scene_path.parent / sc["sensors"], up, north)
-    write_radiance_scene(tris, mats, work / "scene.rad")
-    write_radiance_scene(tris, mats, work / "scene_black.rad", black=True)
+    write_radiance_scene(tris, mats, work / "scene.rad", glazing=a.glazing)
+    write_radiance_scene(tris, mats, work / "scene_black.rad", black=True, glazing=a.glazing)
     pts_text = "".join(f"{p[0]:.9g} {p[1]:.9g} {p[2]:.9g} {d[0]:.9g} {d[1]:.9g} {d[2]:.9g}\n"
                        for _, p, d in sensors)
     (work / "sensors.pts").write_text(pts_text)
@@ -503,7 +527,7 @@ def main():
     for key, title, skycmd, dsargs in instants:
         if a.no_instants or (a.only and a.only != key):
             continue
-        d = work / key
+        d = work / (key if a.glazing == "glass" else f"{key}-{a.glazing}")
         d.mkdir(exist_ok=True)
         sky = run(skycmd, env)
         (d / "sky.rad").write_text(sky + glow_lines())
