@@ -10,7 +10,10 @@
 //! direction ([`sun_response`]). Radiance is applied per child of each node (the sources
 //! carry their four children's radiance), one level finer than the sources' L̂, and the
 //! difference to L̂ is reported as an error estimate. Visibility is an exact ray cast
-//! (two-sided opaque occluders, glazing multiplies by τ(θ)).
+//! (two-sided opaque occluders, glazing multiplies by τ(θ)). Direct light is
+//! transmission-only: glazing's specular reflection of sky and sun is not added here (the
+//! interreflection, [`crate::radiosity::transport`], includes it for light reflected by
+//! surfaces).
 
 use crate::math::bvh::Bvh;
 use crate::math::spherical_triangle::{

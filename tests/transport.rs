@@ -296,3 +296,90 @@ fn adjoint_responses_equal_the_forward_solve() {
     // A budget below what the responses need: declined, the caller keeps the forward solve.
     assert!(t.response(1000).is_none());
 }
+
+#[test]
+fn emitter_under_a_pane_sees_its_mirror_image() {
+    // A large black emitter (exitance B = π Ke) facing up at z = 0 and a glazing pane of
+    // Tn = 0.88 at z = h above it, nothing beyond: a surface just above the emitter
+    // receives only the emitter's image in the pane, E = 2 B ∫₀^{π/2} R(θ) cos θ sin θ dθ
+    // (radiance B/π; the hemispherical reflectance ∫₀¹ R(√u) du times B).
+    use daystep::scene::material::glass_reflectance;
+    let (half, h, ke) = (50.0, 0.5, 1.0);
+    let b_emit = PI * ke;
+    let mut b = Builder::new();
+    let lamp = b.material("lamp", 0.0, 0.0);
+    b.input.materials[lamp as usize].ke = Rgb::splat(ke);
+    let glass = b.material("glass", 0.0, 0.88);
+    b.hrect(-half, half, -half, half, 0.0, true, lamp);
+    b.hrect(-half, half, -half, half, h, false, glass);
+    b.sensor(DVec3::new(0.13, -0.21, 0.01), DVec3::Z);
+    let scene = b.build();
+    let n = 200_000;
+    let rho_h: f64 = (0..n)
+        .map(|i| glass_reflectance(0.88, ((i as f64 + 0.5) / n as f64).sqrt()))
+        .sum::<f64>()
+        / n as f64;
+    let exact = b_emit * rho_h;
+    // Finite plates: the image is cut off where it leaves the emitter, beyond
+    // θ_e = atan(half / 2h) from any point near the centre (≥ half − 0.3 m away). At most
+    // (R ≤ 1) the lost part is 2 B ∫_{θ_e}^{π/2} cos θ sin θ dθ = B cos²θ_e.
+    let cos2_edge = 1.0 / (1.0 + ((half - 3.0) / (2.0 * h)).powi(2));
+    let edge = b_emit * cos2_edge;
+    eprintln!(
+        "mirror: hemispherical R {rho_h:.5}, exact E {exact:.5}, edge allowance {:.2e}",
+        edge / exact
+    );
+    assert!(rho_h > 0.08 && rho_h < 0.2, "{rho_h}");
+    let p = TransportParams {
+        element_area_m2: 0.25,
+        far_element_area_m2: 400.0,
+        margin_m: 3.0,
+        directions: 256,
+        resolution: 512,
+        gather_rays: 4096,
+        ..TransportParams::default()
+    };
+    let t = Transport::build(&scene, &scene.sensors, &p);
+    let (st, _) = t.solve(&vec![Rgb::ZERO; t.rows()], None);
+    let e = t.sensors(&st)[0];
+    let bound = 4.0 * e.std_err.x + e.discretisation.x;
+    eprintln!(
+        "  sensor: E {:.5} ± {:.2e} (1σ), disc {:.2e}, rel err {:+.2e}, rows {}, links {}",
+        e.irradiance.x,
+        e.std_err.x,
+        e.discretisation.x,
+        e.irradiance.x / exact - 1.0,
+        t.rows(),
+        t.stats.links
+    );
+    assert!(
+        e.irradiance.x <= exact + bound && e.irradiance.x >= exact - edge - bound,
+        "sensor {} vs {exact} (4σ + disc {bound}, edge {edge})",
+        e.irradiance.x
+    );
+    // The emitter's own rows near the centre receive the same; their estimates come from
+    // disjoint lines, so the standard error of their mean is their spread over √k.
+    let mut vals = Vec::new();
+    for r in 0..t.rows() {
+        let el = &t.mesh.hierarchy.elements[t.mesh.elements[r] as usize];
+        let c = (el.vertices[0] + el.vertices[1] + el.vertices[2]) / 3.0;
+        if c.z < 0.1 && c.x.abs() < 2.0 && c.y.abs() < 2.0 {
+            vals.push(t.indirect_irradiance(&st, r).x);
+        }
+    }
+    let k = vals.len() as f64;
+    let mean = vals.iter().sum::<f64>() / k;
+    let sd = (vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (k - 1.0)).sqrt();
+    let se = sd / k.sqrt();
+    eprintln!(
+        "  emitter rows: {k} rows, mean E {mean:.5} ± {se:.2e} (1σ), rel err {:+.2e}",
+        mean / exact - 1.0
+    );
+    assert!(k >= 16.0);
+    assert!(
+        mean <= exact + 4.0 * se && mean >= exact - edge - 4.0 * se,
+        "rows {mean} vs {exact} (σ {se}, edge {edge})"
+    );
+    // The pane does not transmit back: nothing reaches the emitter except its image.
+    assert!(vals.iter().all(|v| *v > 0.0));
+}

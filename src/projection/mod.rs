@@ -1,7 +1,10 @@
 //! L4 visibility along one direction (Besuievsky & Martín §5): the scene is scan-converted
 //! with an orthographic camera into a Layered Depth Image; each patch's visibility ratio
 //! VR = n_v/n_p drives quad-tree refinement; the result is a [`DirectionRecord`]: for every
-//! lit leaf element its transfer weight (Ap/A)·VR, glazing transmission included.
+//! lit leaf element its transfer weight (Ap/A)·VR, glazing transmission included. Direct
+//! light is transmission-only: glazing's specular reflection of sun and sky onto surfaces
+//! is not modelled (the interreflection, `radiosity::transport`, reflects light coming
+//! from surfaces).
 
 pub mod ldi;
 pub mod refine;

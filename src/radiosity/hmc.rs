@@ -23,6 +23,12 @@
 //!
 //! Determinism: lines of a step are traced in parallel in fixed chunks (pure functions of
 //! the counter-based RNG), then deposited (with refinement) sequentially in line order.
+//!
+//! Glazing here transmits only (reflectance 0): its specular reflection (Radiance `glass`,
+//! ≈ 8 % at normal incidence) is modelled by the default global-line transport
+//! ([`super::transport`]) but not by this optional solver nor its sensor gather
+//! ([`super::gather_sensor`]), which therefore read somewhat less interreflected light
+//! next to windows.
 
 use super::convergence::{self, budget_stop, EnergyAcc, SolveReport, StopReason};
 use super::lines::{barycentric, cosine_direction, uniform_barycentric, End, Outcome, Tracer};

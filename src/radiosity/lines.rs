@@ -1,6 +1,10 @@
 //! Local lines: sampling a point and a cosine-distributed direction on an element, tracing
 //! the line through glazing to its first opaque surface, and the sensor gather that reads
 //! the solved radiosity along cosine-distributed rays.
+//!
+//! [`gather_sensor`] serves the local-line HMC solver ([`super::hmc`]) and, like it, treats
+//! glazing as transmitting only. The global-line transport ([`super::transport`]) also
+//! follows the specular reflection of glazing, using [`Tracer::first_hit`].
 
 use super::{RadiosityState, MAX_RHO};
 use crate::math::bvh::Bvh;
@@ -41,6 +45,23 @@ impl Tracer {
     /// Unit front normal of triangle `tri`.
     pub fn normal(&self, tri: u32) -> DVec3 {
         self.normals[tri as usize]
+    }
+
+    /// The first triangle (opaque or glazing) the ray `origin + t·dir` (unit `dir`) meets
+    /// beyond [`T_MIN_M`], or `None` when it leaves the scene.
+    pub fn first_hit(&self, origin: DVec3, dir: DVec3) -> Option<FirstHit> {
+        let h = self.bvh.closest_hit(origin, dir, T_MIN_M, f64::INFINITY)?;
+        Some(FirstHit {
+            tri: h.triangle,
+            point: origin + dir * h.t,
+            cos: h.cos,
+            glazing: self.material_of(h.triangle).is_glazing(),
+        })
+    }
+
+    /// Material of triangle `tri`.
+    pub fn material_of(&self, tri: u32) -> &Material {
+        &self.materials[self.material[tri as usize] as usize]
     }
 
     /// Follows the ray `origin + t·dir` (unit `dir`) carrying `power`: glazing passes the
@@ -91,6 +112,20 @@ impl Tracer {
             glazing_loss: lost + p,
         }
     }
+}
+
+/// The first surface a ray meets ([`Tracer::first_hit`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FirstHit {
+    /// Triangle hit.
+    pub tri: u32,
+    /// Hit point, m.
+    pub point: DVec3,
+    /// Cosine between the ray direction and the triangle's front normal (signed: negative
+    /// on the front face).
+    pub cos: f64,
+    /// Whether the triangle is glazing.
+    pub glazing: bool,
 }
 
 /// Where a line ended.

@@ -8,7 +8,9 @@
 //!   surfaces. Only the front face (triangle normal side, counter-clockwise vertices) emits
 //!   and receives; a line meeting the back face of an opaque triangle is absorbed there
 //!   (counted in the energy balance as absorbed). Glazing (ρ = 0) lets a line through with
-//!   its transmittance τ(θ); the rest of the line's power is counted as absorbed.
+//!   its transmittance τ(θ); the rest of the line's power is counted as absorbed (this
+//!   solver does not follow glazing's specular reflection; the global-line
+//!   [`transport`] does).
 //! * **Shooting (incremental Jacobi).** Each step shoots all unshot power with local lines:
 //!   a source leaf ∝ A·Σ|unshot| (so every line carries the same power), a uniform point on
 //!   it, a cosine-distributed direction, the first hit by the exact BVH ray cast. The

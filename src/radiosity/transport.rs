@@ -10,6 +10,18 @@
 //!   crossing i) estimates the form factor from i to j, without bias (Sbert's global
 //!   lines; the transillumination idea of the paper's references [10], [15]). Counts are
 //!   summed in fixed point, so the operator does not depend on thread scheduling.
+//! * **Glazing reflection.** Glazing also reflects specularly, with Radiance `glass`'s
+//!   R(θ) ([`crate::scene::material::glass_reflectance`]). Where a line meets a pane g
+//!   and the nearest opaque fragment A on one side faces g, the light A receives along
+//!   the line from g includes g's mirror image: the mirror direction is traced from g (a
+//!   BVH ray, through further panes with τ) and, at the front face of an opaque C, the
+//!   one-way link A ← C gets τ_between · R_g(θ) · τ_after (per line of A, like the
+//!   transmitted links). One way only: the reverse path C ← A is the line of the mirrored
+//!   bundle direction, which the uniform directions cover in expectation. Second
+//!   reflections (R² ≈ 1 %) are left out; the sensor gather adds the mirror image in the
+//!   first pane a ray meets. Scenes without glazing are unchanged (no extra work). Direct
+//!   light (sun and sky onto surfaces, `src/projection`, `src/sensors.rs`) stays
+//!   transmission-only.
 //! * **Mesh.** The input triangles, split by midpoint quadtree until each element is at
 //!   most `element_area_m2`. The operator does not contain reflectances, emission or
 //!   daylight: a change of `Kd`, site or weather reuses it, and the direct irradiance of
@@ -24,11 +36,12 @@
 //!   per sensor from the same lines aggregated one level coarser (parent elements):
 //!   |fine − coarse|.
 
-use super::lines::{barycentric, cosine_direction, End, Tracer};
+use super::lines::{barycentric, cosine_direction, End, Outcome, Tracer};
 use super::{child_of, MAX_RHO};
 use crate::hierarchy::{ElementKey, Hierarchy, MAX_DEPTH};
 use crate::math::rng::{mix64, uniform};
 use crate::photometry::{grey, Rgb};
+use crate::projection::ldi::Fragment;
 use crate::projection::{Ldi, ProjectionScene};
 use crate::scene::{Scene, Sensor};
 use glam::DVec3;
@@ -440,7 +453,7 @@ impl Transport {
             .into_par_iter()
             .map(|p| {
                 let seed = mix64(params.seed ^ mix64(p as u64 + 1));
-                let (f, lines) = operator(&pscene, mesh, per, params.resolution, seed);
+                let (f, lines) = operator(&pscene, &tracer, mesh, per, params.resolution, seed);
                 let g = gather(&tracer, mesh, sensors, gather_per, seed);
                 let f_coarse = coarse_operator(&f, mesh);
                 let g_coarse = g.map_cols(&mesh.coarse_of);
@@ -787,6 +800,7 @@ fn bundle_direction(m: u32, n: u32, seed: u64) -> DVec3 {
 /// transmission sums per (row, row) pair, normalised to F̂.
 fn operator(
     pscene: &ProjectionScene,
+    tracer: &Tracer,
     mesh: &Mesh,
     n_dirs: u32,
     resolution: u32,
@@ -829,6 +843,12 @@ fn operator(
                 .collect();
             let mut pairs: Vec<(u64, [u64; 3])> = Vec::new();
             let mut counts = vec![0u32; rows];
+            let mut panes: Vec<Fragment> = Vec::new();
+            let mirror = Mirror {
+                pscene,
+                tracer,
+                mesh,
+            };
             for j in 0..cam.height {
                 for i in 0..cam.width {
                     let list = ldi.pixel(i, j);
@@ -841,10 +861,18 @@ fn operator(
                     // (row, faces the source side) of the last opaque fragment, τ since.
                     let mut prev: Option<(u32, bool)> = None;
                     let mut tau = Rgb::ONE;
+                    // Glazing fragments since the last opaque one (triangle, height).
+                    panes.clear();
                     for fr in list {
                         let t = fr.tri as usize;
                         if !opaque[t] {
+                            // Light from the opaque fragment above (facing down, towards
+                            // this pane) reflected back up to it.
+                            if let Some((pr, false)) = prev {
+                                mirror.link(pr, fr, base, d, tau, &mut pairs);
+                            }
                             tau *= pass[t];
+                            panes.push(*fr);
                             continue;
                         }
                         let p = base + d * fr.height as f64;
@@ -852,13 +880,19 @@ fn operator(
                         let row = mesh.row_at(fr.tri, bary);
                         let up = pscene.normals[t].dot(d) > 0.0;
                         counts[row as usize] += 1;
+                        if up {
+                            // Light reflected down to this fragment by each pane above it
+                            // (up to the previous opaque one), through the panes between.
+                            let mut between = Rgb::ONE;
+                            for g in panes.iter().rev() {
+                                mirror.link(row, g, base, -d, between, &mut pairs);
+                                between *= pass[g.tri as usize];
+                            }
+                        }
+                        panes.clear();
                         if let Some((pr, p_up)) = prev {
                             if !p_up && up && tau != Rgb::ZERO {
-                                let q = [
-                                    (tau.x * FIX).round() as u64,
-                                    (tau.y * FIX).round() as u64,
-                                    (tau.z * FIX).round() as u64,
-                                ];
+                                let q = fixed(tau);
                                 pairs.push(((row as u64) << 32 | pr as u64, q));
                                 pairs.push(((pr as u64) << 32 | row as u64, q));
                             }
@@ -889,6 +923,70 @@ fn operator(
     (Sparse::from_sorted(rows, entries), lines)
 }
 
+/// Fixed-point value of a transmission (or reflection) factor.
+fn fixed(v: Rgb) -> [u64; 3] {
+    [
+        (v.x * FIX).round() as u64,
+        (v.y * FIX).round() as u64,
+        (v.z * FIX).round() as u64,
+    ]
+}
+
+/// The specular reflection of glazing in the global-line operator.
+struct Mirror<'a> {
+    pscene: &'a ProjectionScene,
+    tracer: &'a Tracer,
+    mesh: &'a Mesh,
+}
+
+impl Mirror<'_> {
+    /// A line of the bundle (pixel line `base + h·d`) reaches row `receiver` from pane
+    /// fragment `g`, travelling along unit `u` (±d) through panes of transmission
+    /// `between`: the light arriving along it was reflected at g, coming from the mirror
+    /// direction. Traces that direction (through further panes, τ) and, when it meets the
+    /// front face of an opaque triangle, adds the one-way link receiver ← source with
+    /// weight between · R_g(θ) · τ_after. One way only: the reverse path is the line of the
+    /// mirrored bundle direction, which the directions cover in expectation.
+    fn link(
+        &self,
+        receiver: u32,
+        g: &Fragment,
+        base: DVec3,
+        u: DVec3,
+        between: Rgb,
+        pairs: &mut Vec<(u64, [u64; 3])>,
+    ) {
+        if between == Rgb::ZERO {
+            return;
+        }
+        let t = g.tri as usize;
+        let n = self.pscene.normals[t];
+        let c = u.dot(n);
+        let r = self.pscene.materials[self.pscene.material[t] as usize].specular_reflectance(c);
+        let w = between * r;
+        if w == Rgb::ZERO {
+            return;
+        }
+        // The point on the pane's plane, in f64: the fragment's f32 height could leave it
+        // on the far side, and the mirror ray would then cross the pane. (A line in the
+        // pane's plane, c = 0, is of measure zero.)
+        if c.abs() < 1e-12 {
+            return;
+        }
+        let origin = base + u * ((self.pscene.vertices[t][0] - base).dot(n) / c);
+        let dir = (n * (2.0 * c) - u).normalize();
+        let out = self.tracer.trace(origin, dir, w);
+        if let End::Front { tri, point, .. } = out.end {
+            if out.power == Rgb::ZERO {
+                return;
+            }
+            let root = self.pscene.vertices[tri as usize];
+            let source = self.mesh.row_at(tri, barycentric(root, point));
+            pairs.push(((receiver as u64) << 32 | source as u64, fixed(out.power)));
+        }
+    }
+}
+
 /// One bundle's merged (pair key, fixed-point τ) links and per-row line counts.
 type DirectionLines = (Vec<(u64, [u64; 3])>, Vec<u32>);
 
@@ -909,7 +1007,10 @@ fn merge_pairs(mut v: Vec<(u64, [u64; 3])>) -> Vec<(u64, [u64; 3])> {
 }
 
 /// The sensor gather: `rays` jittered-stratified cosine rays per sensor; a ray through
-/// glazing keeps τ(θ); one reaching a front face adds τ/rays to G[sensor, row].
+/// glazing keeps τ(θ); one reaching a front face adds τ/rays to G[sensor, row]. At the
+/// first pane a ray meets (only the first: second reflections, R² ≈ 1 %, are left out) the
+/// mirror direction is traced too, with weight R(θ), and adds R·τ_after/rays where it
+/// reaches a front face.
 fn gather(tracer: &Tracer, mesh: &Mesh, sensors: &[Sensor], rays: u32, seed: u64) -> Sparse {
     let m = (rays as f64).sqrt().ceil() as u64;
     let per: Vec<Vec<(u32, [f32; 3])>> = sensors
@@ -925,11 +1026,22 @@ fn gather(tracer: &Tracer, mesh: &Mesh, sensors: &[Sensor], rays: u32, seed: u64
                     let u1 = (i as f64 + uniform(seed, stream, 2 * idx)) / m as f64;
                     let u2 = (j as f64 + uniform(seed, stream, 2 * idx + 1)) / m as f64;
                     let (d, _) = cosine_direction(n, u1, u2);
-                    let out = tracer.trace(s.position, d, Rgb::ONE);
-                    if let End::Front { tri, point, .. } = out.end {
-                        let root = mesh.hierarchy.elements[tri as usize].vertices;
-                        let row = mesh.row_at(tri, barycentric(root, point));
-                        *acc.entry(row).or_default() += out.power;
+                    let mut add = |out: Outcome| {
+                        if let End::Front { tri, point, .. } = out.end {
+                            let root = mesh.hierarchy.elements[tri as usize].vertices;
+                            let row = mesh.row_at(tri, barycentric(root, point));
+                            *acc.entry(row).or_default() += out.power;
+                        }
+                    };
+                    add(tracer.trace(s.position, d, Rgb::ONE));
+                    // The mirror image in the first pane the ray meets, if any.
+                    if let Some(h) = tracer.first_hit(s.position, d) {
+                        if h.glazing {
+                            let n = tracer.normal(h.tri);
+                            let r = tracer.material_of(h.tri).specular_reflectance(h.cos);
+                            let dir = (d - n * (2.0 * d.dot(n))).normalize();
+                            add(tracer.trace(h.point, dir, r));
+                        }
                     }
                 }
             }

@@ -1,5 +1,10 @@
 //! Materials from MTL: diffuse reflectance `Kd`, glazing transmittance `Tf` with the angular
 //! fall-off of a single clear pane (Radiance `glass`, n = 1.52), emitted radiance `Ke`.
+//!
+//! Glazing also reflects specularly, with Radiance `glass`'s reflectance
+//! ([`glass_reflectance`], [`Material::specular_reflectance`]): about 8 % at normal
+//! incidence, rising to 1 at grazing incidence. The global-line interreflection uses it;
+//! direct light (sun and sky onto surfaces) is transmission-only.
 
 use crate::photometry::Rgb;
 
@@ -26,7 +31,8 @@ impl Material {
         self.ke.max_element() > 0.0
     }
     /// Diffuse reflectance used by the radiosity solver: `Kd` for opaque materials, zero
-    /// for glazing (its specular reflection is not modelled).
+    /// for glazing (glazing reflects specularly only, see
+    /// [`Material::specular_reflectance`]).
     pub fn reflectance(&self) -> Rgb {
         if self.is_glazing() {
             Rgb::ZERO
@@ -48,6 +54,23 @@ impl Material {
             glass_transmittance(self.tf.x, cos_incidence),
             glass_transmittance(self.tf.y, cos_incidence),
             glass_transmittance(self.tf.z, cos_incidence),
+        )
+    }
+    /// Specular (mirror) reflectance (per channel, 0..1) at incidence with
+    /// `|cos θ| = cos_incidence` (either side of the pane); zero for opaque materials, whose
+    /// reflection is the diffuse [`Material::reflectance`].
+    ///
+    /// Each channel follows Radiance's `glass` with n = 1.52 (see [`glass_reflectance`]);
+    /// a channel whose `Tf` is 0 still reflects at the front surface (Fresnel, ≈ 4 %).
+    /// `specular_reflectance + transmittance ≤ 1` per channel at every angle.
+    pub fn specular_reflectance(&self, cos_incidence: f64) -> Rgb {
+        if !self.is_glazing() {
+            return Rgb::ZERO;
+        }
+        Rgb::new(
+            glass_reflectance(self.tf.x, cos_incidence),
+            glass_reflectance(self.tf.y, cos_incidence),
+            glass_reflectance(self.tf.z, cos_incidence),
         )
     }
 }
@@ -77,17 +100,11 @@ pub fn glass_transmittance(tn: f64, cos_incidence: f64) -> f64 {
         return 0.0;
     }
     let tn = tn.min(1.0);
-    let cos_i = if cos_incidence.is_nan() {
-        0.0
-    } else {
-        cos_incidence.abs().min(1.0)
-    };
+    let cos_i = fold_cos(cos_incidence);
     if cos_i <= 0.0 {
         return 0.0;
     }
-    // Internal transmissivity, rationalised (A = C²) so small `tn` suffers no cancellation;
-    // it equals Radiance's expression to ~1e-8.
-    let t = GLASS_B * tn / (((GLASS_C * GLASS_C + GLASS_B * tn * tn).sqrt() + GLASS_C) * GLASS_D);
+    let t = transmissivity(tn);
     if t <= 1.0 {
         pane(t, cos_i)
     } else {
@@ -95,8 +112,66 @@ pub fn glass_transmittance(tn: f64, cos_incidence: f64) -> f64 {
     }
 }
 
-/// One pane with internal transmissivity `t` ≤ 1 at incidence cosine `cos_i` ∈ (0, 1].
-fn pane(t: f64, cos_i: f64) -> f64 {
+/// Specular reflectance of one clear pane (Radiance `glass`, n = 1.52, both polarisations
+/// averaged, multiple internal reflections included) for normal-incidence transmittance
+/// `tn` ∈ [0, 1] at incidence `|cos θ| = cos_incidence`, from either side.
+///
+/// Per polarisation, with r the single-surface Fresnel reflectance and d = t^(1/cos θt)
+/// the internal transmission along the refracted path (t the transmissivity that
+/// [`glass_transmittance`] derives from `tn`): R = r + (1 − r)² r d² / (1 − r² d²)
+/// (Radiance glass.c's r(1 + (1 − 2r)d²)/(1 − r²d²)). About 0.08 at normal incidence for
+/// `tn` = 0.88, 1 at grazing incidence; `tn` = 0 gives the front surface alone (r ≈ 0.043).
+///
+/// `glass_reflectance + glass_transmittance ≤ 1` at every angle. Above the lossless limit
+/// (`tn` > 0.918, see [`glass_transmittance`]) the pane is taken as non-absorbing:
+/// R = 1 − T. Inputs outside their ranges (or NaN) are clamped like
+/// [`glass_transmittance`]'s; NaN `tn` reflects nothing.
+pub fn glass_reflectance(tn: f64, cos_incidence: f64) -> f64 {
+    if tn.is_nan() {
+        return 0.0;
+    }
+    let tn = tn.clamp(0.0, 1.0);
+    let cos_i = fold_cos(cos_incidence);
+    if cos_i <= 0.0 {
+        return 1.0;
+    }
+    let t = transmissivity(tn);
+    if t <= 1.0 {
+        let (rs, rp, d) = fresnel(t, cos_i);
+        let one = |r: f64| {
+            let rd2 = r * r * d * d;
+            if rd2 >= 1.0 {
+                // r rounds to 1 only at grazing incidence: total reflection.
+                1.0
+            } else {
+                r + (1.0 - r).powi(2) * r * d * d / (1.0 - rd2)
+            }
+        };
+        (0.5 * (one(rs) + one(rp))).clamp(0.0, 1.0 - pane(t, cos_i))
+    } else {
+        (1.0 - glass_transmittance(tn, cos_i)).clamp(0.0, 1.0)
+    }
+}
+
+/// `|cos θ|` folded into [0, 1] (NaN → 0, grazing).
+fn fold_cos(cos_incidence: f64) -> f64 {
+    if cos_incidence.is_nan() {
+        0.0
+    } else {
+        cos_incidence.abs().min(1.0)
+    }
+}
+
+/// Radiance's internal transmissivity of a pane of normal-incidence transmittance
+/// `tn` ∈ (0, 1], rationalised (A = C²) so small `tn` suffers no cancellation; it equals
+/// Radiance's expression to ~1e-8.
+fn transmissivity(tn: f64) -> f64 {
+    GLASS_B * tn / (((GLASS_C * GLASS_C + GLASS_B * tn * tn).sqrt() + GLASS_C) * GLASS_D)
+}
+
+/// Single-surface Fresnel reflectances (s, p) and the internal transmission t^(1/cos θt)
+/// at incidence cosine `cos_i` ∈ (0, 1].
+fn fresnel(t: f64, cos_i: f64) -> (f64, f64, f64) {
     let n = GLASS_INDEX;
     let sin_i = (1.0 - cos_i * cos_i).max(0.0).sqrt();
     let sin_t = sin_i / n;
@@ -105,7 +180,12 @@ fn pane(t: f64, cos_i: f64) -> f64 {
     // (tan(θ−θt)/tan(θ+θt))² but without the 0/0 at normal incidence.
     let rs = ((cos_i - n * cos_t) / (cos_i + n * cos_t)).powi(2);
     let rp = ((n * cos_i - cos_t) / (n * cos_i + cos_t)).powi(2);
-    let a = t.powf(1.0 / cos_t);
+    (rs, rp, t.powf(1.0 / cos_t))
+}
+
+/// One pane with internal transmissivity `t` ≤ 1 at incidence cosine `cos_i` ∈ (0, 1].
+fn pane(t: f64, cos_i: f64) -> f64 {
+    let (rs, rp, a) = fresnel(t, cos_i);
     let one = |r: f64| {
         // With t = 1 and r rounding to 1 (grazing) the term is 0/0; its limit is 0.
         let ra = r * a;
@@ -207,5 +287,110 @@ mod tests {
         for c in [f64::NAN, f64::INFINITY, -2.0, 1e-300, 5e-324] {
             assert!(glass_transmittance(0.88, c).is_finite());
         }
+    }
+
+    /// Fresnel reflectance of one surface, written out independently of the module:
+    /// s and p from Snell's law with angles (not cosines).
+    fn fresnel_angles(theta: f64) -> (f64, f64) {
+        let n = 1.52;
+        let tt = (theta.sin() / n).asin();
+        if theta == 0.0 {
+            let r = ((n - 1.0) / (n + 1.0)).powi(2);
+            return (r, r);
+        }
+        let rs = ((theta - tt).sin() / (theta + tt).sin()).powi(2);
+        let rp = ((theta - tt).tan() / (theta + tt).tan()).powi(2);
+        (rs, rp)
+    }
+
+    #[test]
+    fn reflectance_matches_fresnel_written_out() {
+        // A pane with internal transmission a along the refracted path: light bounces
+        // between the faces, R = r + (1 − r)² r a² Σ (r a)^2k, averaged over s and p.
+        for tn in [0.0, 0.6, 0.88] {
+            for deg in [0.0_f64, 60.0] {
+                let theta = deg.to_radians();
+                let (rs, rp) = fresnel_angles(theta);
+                // Radiance's transmissivity from tn: solve tn = T(t, 0°) for t by bisection
+                // on the lossless-series transmittance, independently of the closed form.
+                let r0 = fresnel_angles(0.0).0;
+                let t_of = |t: f64| (1.0 - r0).powi(2) * t / (1.0 - r0 * r0 * t * t);
+                let (mut lo, mut hi) = (0.0, 1.0);
+                for _ in 0..200 {
+                    let mid = 0.5 * (lo + hi);
+                    if t_of(mid) < tn {
+                        lo = mid
+                    } else {
+                        hi = mid
+                    }
+                }
+                let t = 0.5 * (lo + hi);
+                let cos_t = (1.0 - (theta.sin() / 1.52).powi(2)).sqrt();
+                let a = t.powf(1.0 / cos_t);
+                let series = |r: f64| {
+                    let mut sum = r;
+                    let mut term = (1.0 - r).powi(2) * r * a * a;
+                    for _ in 0..200 {
+                        sum += term;
+                        term *= r * r * a * a;
+                    }
+                    sum
+                };
+                let want = 0.5 * (series(rs) + series(rp));
+                let got = glass_reflectance(tn, theta.cos());
+                assert!(
+                    (got - want).abs() < 1e-6,
+                    "tn {tn} at {deg}°: {got} vs {want}"
+                );
+            }
+        }
+        // Radiance's glass with Tn = 0.88: R(0°) ≈ 0.08.
+        let r0 = glass_reflectance(0.88, 1.0);
+        assert!((r0 - 0.08).abs() < 0.003, "{r0}");
+    }
+
+    #[test]
+    fn reflectance_and_transmittance_conserve_energy() {
+        for tn in [0.0, 1e-9, 0.3, 0.6, 0.88, 0.918, 0.919, 0.95, 1.0, 2.0] {
+            let mut prev = 0.0;
+            for k in 0..=2000 {
+                let c = 1.0 - k as f64 / 2000.0;
+                let r = glass_reflectance(tn, c);
+                let t = glass_transmittance(tn, c);
+                assert!(r.is_finite() && r >= 0.0, "tn {tn} cos {c}: {r}");
+                assert!(r + t <= 1.0 + 1e-12, "tn {tn} cos {c}: R {r} + T {t}");
+                // Reflectance rises towards grazing incidence beyond 60°; nearer normal
+                // incidence the longer path in an absorbing pane may lower it slightly.
+                if c <= 0.5 {
+                    assert!(r >= prev - 1e-12, "tn {tn} cos {c}: {r} < {prev}");
+                } else {
+                    assert!(
+                        r >= glass_reflectance(tn, 1.0) - 1e-3,
+                        "tn {tn} cos {c}: {r}"
+                    );
+                }
+                prev = r;
+            }
+            // R → 1 at grazing incidence.
+            assert!(glass_reflectance(tn, 1e-6) > 0.999, "tn {tn}");
+            assert_eq!(glass_reflectance(tn, 0.0), 1.0);
+        }
+        for c in [f64::NAN, f64::INFINITY, -2.0, 1e-300, 5e-324] {
+            assert!(glass_reflectance(0.88, c).is_finite());
+        }
+        assert_eq!(glass_reflectance(f64::NAN, 0.5), 0.0);
+    }
+
+    #[test]
+    fn specular_reflectance_per_channel_and_zero_when_opaque() {
+        let m = glazing(Rgb::new(0.88, 0.0, 0.6));
+        let r = m.specular_reflectance(0.5);
+        assert_eq!(r.x, glass_reflectance(0.88, 0.5));
+        assert_eq!(r.y, glass_reflectance(0.0, 0.5));
+        assert_eq!(r.z, glass_reflectance(0.6, 0.5));
+        assert_eq!(m.specular_reflectance(-0.5), r);
+        assert_eq!(glazing(Rgb::ZERO).specular_reflectance(1.0), Rgb::ZERO);
+        // The diffuse reflectance of glazing stays zero.
+        assert_eq!(m.reflectance(), Rgb::ZERO);
     }
 }

@@ -14,8 +14,15 @@ use crate::scene::Scene;
 const TAG_STATS: u32 = FIRST_USER_TAG;
 const TAG_PARTS: u32 = FIRST_USER_TAG + 0x100;
 
+/// Version of what an operator record holds, hashed into its key: bumped when the
+/// operator's content changes for the same scene and parameters, so older operators are
+/// rebuilt rather than reused. 2: glazing reflects specularly (Radiance `glass`).
+pub const OPERATOR_VERSION: u32 = 2;
+
 fn key(scene: &Scene, params: &TransportParams) -> RecordKey {
-    let extra = serde_json::to_vec(params).expect("parameters serialise");
+    let mut extra = b"transport operator v".to_vec();
+    extra.extend_from_slice(&OPERATOR_VERSION.to_le_bytes());
+    extra.extend(serde_json::to_vec(params).expect("parameters serialise"));
     RecordKey {
         scene: cache::scene_hash(scene, &ProjectionParams::default(), &extra),
         kind: KIND_TRANSPORT,
