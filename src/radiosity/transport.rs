@@ -1033,9 +1033,15 @@ fn gather(tracer: &Tracer, mesh: &Mesh, sensors: &[Sensor], rays: u32, seed: u64
                             *acc.entry(row).or_default() += out.power;
                         }
                     };
-                    add(tracer.trace(s.position, d, Rgb::ONE));
-                    // The mirror image in the first pane the ray meets, if any.
-                    if let Some(h) = tracer.first_hit(s.position, d) {
+                    let out = tracer.trace(s.position, d, Rgb::ONE);
+                    // Only a ray that met glazing (every pane loses something: Fresnel)
+                    // looks for the mirror image in the first pane it met.
+                    let met_glazing = out.glazing_loss != Rgb::ZERO;
+                    add(out);
+                    if let Some(h) = met_glazing
+                        .then(|| tracer.first_hit(s.position, d))
+                        .flatten()
+                    {
                         if h.glazing {
                             let n = tracer.normal(h.tri);
                             let r = tracer.material_of(h.tri).specular_reflectance(h.cos);
