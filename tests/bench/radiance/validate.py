@@ -157,7 +157,7 @@ def radname(name):
     return "m_" + "".join(ch if ch.isalnum() or ch in "_-." else "_" for ch in name)
 
 
-NONREFLECTING_CAL = """{ Radiance glass's transmittance without its reflection (daystep's glazing model):
+NONREFLECTING_CAL = """{ Radiance glass's transmittance without its reflection (a diagnostic):
   the glass.c formula for refractive index 1.52 and transmissivity tn at cos = |Rdot|. }
 gn = 1.52;
 gci = max(abs(Rdot), 1e-6);
@@ -172,7 +172,7 @@ gtau(tn) = .5*sq(1-gre)*tn^(1/gct)/(1-gre*gre*tn^(2/gct))
 def write_radiance_scene(tris, mats, path, black=False, glazing="glass"):
     """Materials and polygons. black=True: every opaque surface reflects nothing (glass and
     light stay), for the direct-only runs. glazing="nonreflecting": panes are a BRTDfunc
-    with glass's angular transmittance and no reflection, which is daystep's model."""
+    with glass's angular transmittance and no reflection (isolates glazing reflection)."""
     used = sorted({t[3] for t in tris})
     lines = ["# converted from the daystep scene by tests/bench/radiance/validate.py"]
     for name in used:
@@ -463,8 +463,8 @@ def main():
     ap.add_argument("--no-instants", action="store_true", help="skip the instants")
     ap.add_argument("--glazing", choices=["glass", "nonreflecting"], default="glass",
                     help="Radiance panes: glass (reflects 8 %% at normal incidence, more "
-                         "at grazing) or a BRTDfunc with glass's transmittance and no "
-                         "reflection, as daystep models glazing")
+                         "at grazing; daystep models that too) or, as a diagnostic, a "
+                         "BRTDfunc with glass's transmittance and no reflection")
     a = ap.parse_args()
 
     env, bindir, libdir = radiance_env()
