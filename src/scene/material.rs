@@ -47,14 +47,7 @@ impl Material {
     /// a channel whose `Tf` is 0 transmits nothing. Finite for every input; non-finite or
     /// out-of-range `cos_incidence` is folded into [0, 1] first.
     pub fn transmittance(&self, cos_incidence: f64) -> Rgb {
-        if !self.is_glazing() {
-            return Rgb::ZERO;
-        }
-        Rgb::new(
-            glass_transmittance(self.tf.x, cos_incidence),
-            glass_transmittance(self.tf.y, cos_incidence),
-            glass_transmittance(self.tf.z, cos_incidence),
-        )
+        self.glazing_channels(glass_transmittance, cos_incidence)
     }
     /// Specular (mirror) reflectance (per channel, 0..1) at incidence with
     /// `|cos θ| = cos_incidence` (either side of the pane); zero for opaque materials, whose
@@ -64,13 +57,17 @@ impl Material {
     /// a channel whose `Tf` is 0 still reflects at the front surface (Fresnel, ≈ 4 %).
     /// `specular_reflectance + transmittance ≤ 1` per channel at every angle.
     pub fn specular_reflectance(&self, cos_incidence: f64) -> Rgb {
+        self.glazing_channels(glass_reflectance, cos_incidence)
+    }
+    /// `f(Tf channel, cos)` per channel for glazing, zero for opaque materials.
+    fn glazing_channels(&self, f: fn(f64, f64) -> f64, cos_incidence: f64) -> Rgb {
         if !self.is_glazing() {
             return Rgb::ZERO;
         }
         Rgb::new(
-            glass_reflectance(self.tf.x, cos_incidence),
-            glass_reflectance(self.tf.y, cos_incidence),
-            glass_reflectance(self.tf.z, cos_incidence),
+            f(self.tf.x, cos_incidence),
+            f(self.tf.y, cos_incidence),
+            f(self.tf.z, cos_incidence),
         )
     }
 }
