@@ -1,19 +1,13 @@
-//! Local lines: sampling a point and a cosine-distributed direction on an element, tracing
-//! the line through glazing to its first opaque surface, and the sensor gather that reads
-//! the solved radiosity along cosine-distributed rays.
-//!
-//! [`gather_sensor`] serves the local-line HMC solver ([`super::hmc`]) and, like it, treats
-//! glazing as transmitting only. The global-line transport ([`super::transport`]) also
-//! follows the specular reflection of glazing, using [`Tracer::first_hit`].
+//! Rays through the scene for the interreflection: tracing a ray through glazing to its
+//! first opaque surface, cosine-distributed directions and barycentric coordinates, as the
+//! global-line transport's sensor gather and glazing mirror use them
+//! ([`super::transport`]).
 
-use super::{RadiosityState, MAX_RHO};
 use crate::math::bvh::Bvh;
 use crate::math::frame::basis;
-use crate::math::rng::{mix64, uniform};
 use crate::photometry::Rgb;
 use crate::scene::{Material, Scene};
 use glam::DVec3;
-use std::collections::BTreeMap;
 use std::f64::consts::PI;
 
 /// Rays start this far (m) from their origin so they do not meet the surface they leave.
@@ -190,102 +184,10 @@ pub fn barycentric(v: [DVec3; 3], p: DVec3) -> [f64; 3] {
     [b0 / s, b1 / s, b2 / s]
 }
 
-/// Indirect irradiance at a sensor.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct SensorIndirect {
-    /// Irradiance from the surfaces' radiosity, RGB W/m².
-    pub irradiance: Rgb,
-    /// 1σ standard error: ray sampling plus the radiosity noise of the elements read.
-    pub std_err: Rgb,
-    /// Rays cast.
-    pub rays: u32,
-}
-
-/// Indirect irradiance (RGB W/m²) at `point` facing unit `normal`, from the solved
-/// radiosity: E = ∫ L cos θ dω with L = B/π for diffuse surfaces; with cosine-distributed
-/// rays (pdf cos θ/π) the estimator is E = mean(B_hit·τ) over about `rays` rays, cast as
-/// [`GATHER_BATCHES`] independent jittered-stratified batches. Rays pass
-/// glazing with τ(θ); rays meeting a back face or leaving the scene contribute nothing (sky
-/// and sun are the direct gather's). The random numbers are a pure function of `seed`.
-///
-/// The standard error adds the ray-sampling variance to the radiosity variance of the
-/// elements read, Σ_e w_e² σ_e² with w_e the share of rays reading element e (an element
-/// read by many rays contributes its error coherently).
-pub fn gather_sensor(
-    state: &RadiosityState,
-    tracer: &Tracer,
-    point: DVec3,
-    normal: DVec3,
-    rays: u32,
-    seed: u64,
-) -> SensorIndirect {
-    let n = normal.normalize();
-    let stream = mix64(seed ^ 0x5e45_0a11);
-    // GATHER_BATCHES independent jittered-stratified patterns of m × m rays each: the
-    // strata cut the noise, and the spread of the independent batch means is an honest
-    // standard error (the sample variance of stratified rays would overstate it).
-    let m = ((rays / GATHER_BATCHES).max(1) as f64)
-        .sqrt()
-        .floor()
-        .max(1.0) as u64;
-    let mut batch_means = Vec::with_capacity(GATHER_BATCHES as usize);
-    let mut weights: BTreeMap<u32, f64> = BTreeMap::new();
-    let mut k = 0u64;
-    for _ in 0..GATHER_BATCHES {
-        let mut sum = Rgb::ZERO;
-        for i in 0..m {
-            for j in 0..m {
-                let u1 = (i as f64 + uniform(seed, stream, 2 * k)) / m as f64;
-                let u2 = (j as f64 + uniform(seed, stream, 2 * k + 1)) / m as f64;
-                k += 1;
-                let (d, _) = cosine_direction(n, u1, u2);
-                let out = tracer.trace(point, d, Rgb::ONE);
-                if let End::Front { tri, point: y, .. } = out.end {
-                    let root = state.hierarchy.elements[tri as usize].vertices;
-                    let leaf = state.leaf_at(tri, barycentric(root, y));
-                    *weights.entry(leaf).or_default() += crate::photometry::grey(out.power);
-                    sum += state.radiosity(leaf) * out.power;
-                }
-            }
-        }
-        batch_means.push(sum / (m * m) as f64);
-    }
-    let total = k as f64;
-    let b = GATHER_BATCHES as f64;
-    let mean = batch_means.iter().fold(Rgb::ZERO, |a, x| a + *x) / b;
-    let spread = batch_means
-        .iter()
-        .fold(Rgb::ZERO, |a, x| a + (*x - mean) * (*x - mean))
-        / (b - 1.0)
-        / b;
-    let mut elem_var = Rgb::ZERO;
-    for (&leaf, &w) in &weights {
-        let s = state.radiosity_std_err(leaf);
-        elem_var += s * s * (w / total).powi(2);
-    }
-    SensorIndirect {
-        irradiance: mean,
-        std_err: super::sqrt3(spread + elem_var),
-        rays: k as u32,
-    }
-}
-
-/// Independent stratified batches of the sensor gather (see [`gather_sensor`]).
-pub const GATHER_BATCHES: u32 = 8;
-
-/// Largest reflectance of the scene's opaque materials, clamped below 1 (for bounds).
-pub(crate) fn rho_max(state: &RadiosityState) -> f64 {
-    state
-        .rho
-        .iter()
-        .map(|r| r.max_element())
-        .fold(0.0, f64::max)
-        .min(MAX_RHO)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::rng::uniform;
 
     #[test]
     fn cosine_directions_have_mean_cosine_two_thirds() {

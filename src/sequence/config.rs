@@ -2,7 +2,7 @@
 //! trading error against time.
 
 use crate::projection::ProjectionParams;
-use crate::radiosity::{RadiosityParams, TransportParams};
+use crate::radiosity::TransportParams;
 use crate::sensors::SensorParams;
 use crate::sources::SkyParams;
 use serde::{Deserialize, Serialize};
@@ -43,18 +43,6 @@ pub enum SkySpec {
     None,
 }
 
-/// Which interreflection solver a run uses.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Solver {
-    /// Global-line bundles through LDIs, a fixed operator solved deterministically
-    /// ([`crate::radiosity::Transport`]); the default (README design notes: measured
-    /// against path tracing, it converges; the local-line solver stays biased).
-    GlobalLines,
-    /// Hierarchical Monte Carlo radiosity with local lines ([`crate::radiosity::solve`]).
-    LocalLines,
-}
-
 /// Every knob of a run, grouped by pipeline step.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Quality {
@@ -68,14 +56,8 @@ pub struct Quality {
     pub projection: ProjectionParams,
     /// Sensor gather (direct).
     pub sensors: SensorParams,
-    /// Interreflection solver used.
-    pub solver: Solver,
-    /// Global-line operator (when `solver` is `GlobalLines`).
+    /// The interreflection: global-line operator, its sensor gather and its solve.
     pub transport: TransportParams,
-    /// Local-line HMC solver (when `solver` is `LocalLines`).
-    pub radiosity: RadiosityParams,
-    /// Cosine-distributed rays per sensor for the indirect gather.
-    pub gather_rays: u32,
 }
 
 impl Quality {
@@ -87,7 +69,6 @@ impl Quality {
             sun_spacing_deg: 0.25,
             projection: ProjectionParams::default(),
             sensors: SensorParams::default(),
-            solver: Solver::GlobalLines,
             // Measured on the office against path tracing (README): 1 024 directions at
             // 256 px: 1.6 % RMS indirect error in 0.9 s.
             transport: TransportParams {
@@ -95,20 +76,11 @@ impl Quality {
                 resolution: 256,
                 ..TransportParams::default()
             },
-            // The solver's default target is global (area-weighted over every leaf, outdoor
-            // ground included); interiors need a tighter one (README: presets).
-            radiosity: RadiosityParams {
-                target_rel_error: 0.005,
-                lines_per_step: 80_000,
-                ..RadiosityParams::default()
-            },
-            gather_rays: 4096,
         };
         let q = match name {
             "default" => base,
             "draft" => Quality {
                 name: "draft",
-                solver: base.solver,
                 sky: SkyParams {
                     min_depth: 1,
                     max_depth: 3,
@@ -123,23 +95,15 @@ impl Quality {
                     visibility_tolerance: 0.02,
                     sample_angle_deg: 8.0,
                 },
-                // Fewer lines per step bias the solver (measured: +15 % on the office's
-                // indirect at 5 000), so draft keeps default's solver and saves elsewhere.
-                radiosity: RadiosityParams {
-                    target_rel_error: 0.01,
-                    ..base.radiosity
-                },
                 // 256 directions: 4.5 % RMS indirect error on the office in 0.3 s.
                 transport: TransportParams {
                     directions: 256,
                     gather_rays: 2048,
                     ..base.transport
                 },
-                gather_rays: 1024,
             },
             "high" => Quality {
                 name: "high",
-                solver: base.solver,
                 sky: SkyParams {
                     min_depth: 3,
                     max_depth: 6,
@@ -162,21 +126,14 @@ impl Quality {
                     visibility_tolerance: 0.002,
                     sample_angle_deg: 2.0,
                 },
-                radiosity: RadiosityParams {
-                    target_rel_error: 0.003,
-                    lines_per_step: 160_000,
-                    ..base.radiosity
-                },
                 transport: TransportParams {
                     directions: 4096,
                     gather_rays: 16384,
                     ..base.transport
                 },
-                gather_rays: 16384,
             },
             "reference" => Quality {
                 name: "reference",
-                solver: base.solver,
                 sky: SkyParams {
                     min_depth: 4,
                     max_depth: 7,
@@ -201,11 +158,6 @@ impl Quality {
                     visibility_tolerance: 0.0005,
                     sample_angle_deg: 1.0,
                 },
-                radiosity: RadiosityParams {
-                    target_rel_error: 0.002,
-                    lines_per_step: 320_000,
-                    ..base.radiosity
-                },
                 transport: TransportParams {
                     directions: 8192,
                     resolution: 512,
@@ -213,7 +165,6 @@ impl Quality {
                     gather_rays: 65536,
                     ..base.transport
                 },
-                gather_rays: 65536,
             },
             _ => return None,
         };
@@ -222,7 +173,6 @@ impl Quality {
 
     /// The same preset with every random stream derived from `seed`.
     pub fn with_seed(mut self, seed: u64) -> Quality {
-        self.radiosity.seed = seed;
         self.transport.seed = seed;
         self
     }

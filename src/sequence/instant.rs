@@ -1,14 +1,14 @@
 //! One instant: sky → sources → projections (LDI, VR refinement) → direct transfer →
 //! sensors, with a discretisation-error estimate from one coarser level.
 
-use super::config::{Quality, SkySpec, Solver};
+use super::config::{Quality, SkySpec};
 use super::directions::{DirectionData, Directions};
 use super::report::{Counts, Report, StageTimes, SunReport};
 use crate::error::{Error, Result};
 use crate::hierarchy::Hierarchy;
 use crate::photometry::lux;
 use crate::projection::{self, DirectionRecord, ProjectionScene};
-use crate::radiosity::{self, RadiosityState, Tracer, Transport, TransportState};
+use crate::radiosity::{Transport, TransportSensor, TransportState};
 use crate::scene::Scene;
 use crate::sensors::SensorDirect;
 use crate::site::solar_position::{solar_position, SolarPosition};
@@ -47,8 +47,6 @@ pub struct InstantResult {
     pub hierarchy: Hierarchy,
     /// Direct irradiance per element.
     pub direct: DirectIrradiance,
-    /// The local-line interreflection solution, when that solver ran.
-    pub radiosity: Option<RadiosityState>,
     /// The global-line operator and its solution, when that solver ran.
     pub transport: Option<(Transport, TransportState)>,
     /// The sources used.
@@ -107,16 +105,6 @@ pub(crate) fn sources_for(sky: &Sky, q: &Quality) -> (Vec<Source>, usize, Option
     (list, s.negligible, err)
 }
 
-/// The cheaper, independent solve whose difference to the main one enters `lux_err`.
-fn coarse_radiosity(p: &crate::radiosity::RadiosityParams) -> crate::radiosity::RadiosityParams {
-    crate::radiosity::RadiosityParams {
-        target_rel_error: p.target_rel_error * 2.0,
-        lines_per_step: (p.lines_per_step / 4).max(p.min_lines_per_step),
-        seed: crate::math::rng::mix64(p.seed ^ 0xc0a5e),
-        ..*p
-    }
-}
-
 /// One LDI projection and VR refinement per source, in parallel; records in source order.
 pub fn project_sources(
     scene: &Scene,
@@ -138,7 +126,7 @@ pub fn project_sources(
 
 /// The sun and sky shoot alone (paper §4–5): sources, projections and direct transfer.
 /// Returns the sources, the refined hierarchy and each element's direct irradiance — what
-/// a time-step loop feeds to [`crate::radiosity::warm_start`].
+/// a time-step loop feeds to [`Transport::solve`] (after averaging onto its mesh).
 pub fn direct_light(
     scene: &Scene,
     sky: &Sky,
@@ -280,9 +268,8 @@ pub fn run_sky_with(
         let m = &scene.materials[t.material as usize];
         m.reflectance().max_element() > 0.0 || m.is_emitter()
     });
-    let mut solution = None;
     let mut global = None;
-    if needs_radiosity && quality.solver == Solver::GlobalLines {
+    if needs_radiosity {
         let (t, cached) = times.time("transport_build", || {
             super::operator::transport(scene, &quality.transport, dirs.store())
         });
@@ -301,22 +288,6 @@ pub fn run_sky_with(
         report.transport = Some(t.stats);
         report.transport_solve = Some(rep);
         global = Some((t, st));
-    } else if needs_radiosity {
-        let tracer = times.time("radiosity_setup", || Tracer::new(scene));
-        let mut state = RadiosityState::from_direct(scene, hierarchy.clone(), &direct);
-        let solve = times.time("radiosity", || {
-            radiosity::solve(&mut state, &tracer, &quality.radiosity)
-        });
-        // A second, independent and cheaper solve: its difference to the first is part of
-        // the stated error (the solver's bias at low line counts, which batch spread
-        // alone does not show).
-        let coarse_params = coarse_radiosity(&quality.radiosity);
-        let mut coarse = RadiosityState::from_direct(scene, hierarchy.clone(), &direct);
-        times.time("radiosity_error_estimate", || {
-            radiosity::solve(&mut coarse, &tracer, &coarse_params)
-        });
-        report.radiosity = Some(solve);
-        solution = Some((state, coarse, tracer));
     } else {
         report
             .skipped
@@ -337,66 +308,15 @@ pub fn run_sky_with(
             let cdata = coarse_dirs.get_all(&cs);
             sensors_from_responses(coarse_dirs, &cs, &cdata)
         });
-        let none = || vec![radiosity::SensorIndirect::default(); scene.sensors.len()];
-        let (indirect, indirect_coarse) = match &solution {
-            Some((state, coarse, tracer)) => times.time("indirect_gather", || {
-                let gather = |st: &RadiosityState,
-                              rays: u32,
-                              salt: u64|
-                 -> Vec<radiosity::SensorIndirect> {
-                    scene
-                        .sensors
-                        .par_iter()
-                        .enumerate()
-                        .map(|(k, s)| {
-                            let seed = crate::math::rng::mix64(
-                                quality.radiosity.seed
-                                    ^ salt
-                                    ^ (k as u64).wrapping_mul(0x9e37_79b9),
-                            );
-                            radiosity::gather_sensor(st, tracer, s.position, s.normal, rays, seed)
-                        })
-                        .collect()
-                };
-                (
-                    gather(state, quality.gather_rays, 0),
-                    gather(coarse, (quality.gather_rays / 4).max(64), 0xc0a5e),
-                )
-            }),
-            None => match &global {
-                Some((t, st)) => times.time("indirect_gather", || {
-                    // Mean over the independent operators, and the sensor's error as the
-                    // coarse solve's stand-in: |fine − coarse| + 1σ noise, so the sum
-                    // below reads the same for both solvers.
-                    let out = t.sensors(st);
-                    let fine = out
-                        .iter()
-                        .map(|o| radiosity::SensorIndirect {
-                            irradiance: o.irradiance,
-                            std_err: o.std_err,
-                            rays: 0,
-                        })
-                        .collect();
-                    let coarse = out
-                        .iter()
-                        .map(|o| radiosity::SensorIndirect {
-                            irradiance: o.irradiance + o.discretisation,
-                            std_err: crate::photometry::Rgb::ZERO,
-                            rays: 0,
-                        })
-                        .collect();
-                    (fine, coarse)
-                }),
-                None => (none(), none()),
-            },
+        let indirect: Vec<TransportSensor> = match &global {
+            Some((t, st)) => times.time("indirect_gather", || t.sensors(st)),
+            None => vec![TransportSensor::default(); scene.sensors.len()],
         };
         for (k, (f, c)) in fine.iter().zip(&coarse).enumerate() {
             counts.sensor_rays += f.rays + c.rays;
             let total = lux(f.sun + f.sky);
             let diff = (total - lux(c.sun + c.sky)).abs();
             let ind = &indirect[k];
-            let ind_coarse = &indirect_coarse[k];
-            counts.sensor_rays += ind.rays as u64 + ind_coarse.rays as u64;
             values[k] = SensorValue {
                 lux: total + lux(ind.irradiance),
                 // One coarser level bounds the error of a method converging at least
@@ -406,7 +326,7 @@ pub fn run_sky_with(
                     + f.visibility_err_lux
                     + SKY_NORMALISATION_REL * total.abs()
                     + lux(ind.std_err)
-                    + (lux(ind.irradiance) - lux(ind_coarse.irradiance)).abs(),
+                    + (lux(ind.irradiance) - lux(ind.irradiance + ind.discretisation)).abs(),
                 lux_sun: lux(f.sun),
                 lux_sky: lux(f.sky),
                 lux_indirect: lux(ind.irradiance),
@@ -438,7 +358,6 @@ pub fn run_sky_with(
         sensors: values,
         hierarchy,
         direct,
-        radiosity: solution.map(|(s, _, _)| s),
         transport: global,
         sources,
         report: std::mem::take(report),

@@ -107,9 +107,6 @@ pub struct Report {
     pub warnings: Vec<String>,
     /// How `lux_err` is estimated.
     pub error_model: String,
-    /// The interreflection solve: lines, batches, stop reason, estimated error, energy
-    /// balance; absent when the scene needed none.
-    pub radiosity: Option<crate::radiosity::SolveReport>,
     /// Projection cache counters (hits, misses, rebuilds, bytes mapped), when a run went
     /// through a cache store.
     pub cache: Option<crate::cache::CacheStats>,

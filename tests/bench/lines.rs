@@ -1,15 +1,12 @@
-//! Local lines (HMC, `radiosity::solve`) against global-line bundles
-//! (`radiosity::Transport`): error against time of the indirect illuminance at the
-//! sensors, on the sample office and the generated 10 000-triangle building, direct light
-//! from one Perez instant (`cargo bench --bench lines`). The reference is independent of
-//! both: plain path tracing on the same direct-irradiance field (every bounce re-traced,
+//! Global-line bundles (`radiosity::Transport`): error against time of the indirect
+//! illuminance at the sensors, on the sample office and the generated 10 000-triangle
+//! building, direct light from one Perez instant (`cargo bench --bench lines`). The
+//! reference is independent of the operator: plain path tracing on the same direct-irradiance field (every bounce re-traced,
 //! no mesh, no form factors) at a subset of the sensors. Then a day of 15-minute
 //! warm-started transport steps against cold ones. Prints only.
 
 use daystep::photometry::{lux, Rgb};
-use daystep::radiosity::{
-    gather_sensor, solve, RadiosityParams, RadiosityState, Tracer, Transport, TransportParams,
-};
+use daystep::radiosity::{Tracer, Transport, TransportParams};
 use daystep::scene::{synthetic, Scene};
 use daystep::sequence::instant::{build_sky, direct_light};
 use daystep::sequence::{Quality, SkySpec};
@@ -87,28 +84,6 @@ fn path_traced(
         .collect()
 }
 
-fn hmc_sensors(
-    scene: &Scene,
-    h: &daystep::hierarchy::Hierarchy,
-    e: &[Rgb],
-    tracer: &Tracer,
-    p: &RadiosityParams,
-    rays: u32,
-) -> (Vec<f64>, f64) {
-    let t = Instant::now();
-    let mut st = RadiosityState::new(scene, h.clone(), e);
-    solve(&mut st, tracer, p);
-    let v = scene
-        .sensors
-        .iter()
-        .enumerate()
-        .map(|(k, s)| {
-            lux(gather_sensor(&st, tracer, s.position, s.normal, rays, k as u64 + 1).irradiance)
-        })
-        .collect();
-    (v, t.elapsed().as_secs_f64())
-}
-
 /// RMS and max relative difference over sensors with a reference above 1 lx.
 fn err(a: &[f64], r: &[f64]) -> (f64, f64) {
     let (mut s, mut m, mut n) = (0.0, 0.0f64, 0);
@@ -143,18 +118,6 @@ fn bench(name: &str, scene: &Scene, stride: usize, paths: u64) {
     );
     let pick = |v: &[f64]| subset.iter().map(|&k| v[k]).collect::<Vec<f64>>();
     println!("| method | setting | s | RMS rel. error | max rel. error | stated RMS |\n|---|---|---|---|---|---|");
-    for lines in [250_000u64, 1_000_000, 4_000_000] {
-        let p = RadiosityParams {
-            target_rel_error: 0.0,
-            max_lines: lines,
-            lines_per_step: lines / 40,
-            max_seconds: 600.0,
-            ..Default::default()
-        };
-        let (v, s) = hmc_sensors(scene, &h, &e, &tracer, &p, 4096);
-        let (r, m) = err(&pick(&v), &reference);
-        println!("| local lines (HMC) | {lines} lines, 4096 rays | {s:.2} | {r:.4} | {m:.4} | |");
-    }
     for (dirs, res, area) in [
         (64u32, 512u32, 0.25),
         (256, 256, 0.25),
