@@ -4,11 +4,11 @@
 //! directions, other sensor rays, twice the directions) within their stated errors, with
 //! no drift over 96 fifteen-minute steps; and the warm steps sweep less than cold ones.
 
+use daystep::cache::Store;
 use daystep::photometry::{lux, Rgb};
 use daystep::radiosity::{Transport, TransportParams, TransportState};
 use daystep::scene::Scene;
-use daystep::sequence::instant::direct_light;
-use daystep::sequence::Quality;
+use daystep::sequence::{Engine, EngineOptions, Quality, Report};
 use daystep::site::solar_position::solar_position;
 use daystep::sky::{cie, Sky};
 use std::path::Path;
@@ -61,6 +61,9 @@ fn warm_started_day_stays_within_stated_error_of_cold_solves() {
         Transport::build(&scene, &scene.sensors, &warm_p),
         Transport::build(&scene, &scene.sensors, &cold_p),
     );
+    // The run's own steps give each step's direct light on the refined elements.
+    let store = Store::disabled();
+    let engine = Engine::new(&scene, &q, &store, &EngineOptions::default());
     let mut state: Option<TransportState> = None;
     let (mut compared, mut within, mut worst) = (0usize, 0usize, 0.0f64);
     let (mut warm_sweeps, mut cold_sweeps, mut steps) = (0u32, 0u32, 0usize);
@@ -69,7 +72,8 @@ fn warm_started_day_stays_within_stated_error_of_cold_solves() {
         if sky.sun.is_none() && sky.distribution.is_none() {
             continue; // night: nothing to solve (the annual loop skips it too)
         }
-        let (_, hierarchy, direct) = direct_light(&scene, &sky, &q);
+        let step = engine.step_sky(&sky, None, true, Report::default(), None);
+        let (hierarchy, direct) = step.elements.expect("asked for");
         let e = sum(&direct);
         let (warm, rw) = tw.solve(&tw.mesh.average_onto(&hierarchy, &e), state.as_ref());
         let (cold, rc) = tc.solve(&tc.mesh.average_onto(&hierarchy, &e), None);

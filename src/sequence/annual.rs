@@ -17,27 +17,23 @@
 //!   (unsharded runs and merges), `report.json`.
 
 use super::config::{Quality, SkySpec};
-use super::directions::Directions;
-use super::instant::{build_sky, sensors_from_responses, sources_for, SKY_NORMALISATION_REL};
-use super::surfaces::SurfaceMap;
+use super::report::StageTimes;
+use super::sky::local_to_utc;
+use super::step::{Engine, EngineOptions, StepTime};
 use crate::cache::Store;
 use crate::error::{Error, Result};
 use crate::export::{self, IlluminanceWriter};
-use crate::hierarchy::Hierarchy;
 use crate::metrics::{self, MetricParams};
-use crate::photometry::{lux, Rgb};
-use crate::radiosity::{DirectionResponse, SensorResponse, Transport, TransportState};
+use crate::radiosity::TransportState;
 use crate::scene::Scene;
 use crate::site::solar_position::solar_position;
-use crate::sources::{Source, SourceKey};
 use crate::weather::{Weather, WeatherRecord};
-use chrono::{Datelike, NaiveDate, NaiveDateTime};
+use chrono::{NaiveDate, NaiveDateTime};
 use rayon::prelude::*;
 use serde::Serialize;
-use std::collections::HashMap;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Mutex;
 use std::time::Instant;
 
 /// Days computed in parallel between checkpoints.
@@ -142,7 +138,7 @@ pub struct AnnualReport {
 }
 
 /// One planned timestep.
-struct Step<'w> {
+struct Planned<'w> {
     record: &'w WeatherRecord,
     time: NaiveDateTime,
 }
@@ -156,12 +152,6 @@ struct StepOut {
     rel_err: Vec<f32>,
     sweeps: u32,
 }
-
-/// Per-direction mesh irradiance weights: row → weight (RGB); memoised per run.
-type MeshWeights = Arc<Vec<(u32, Rgb)>>;
-
-/// Memo of per-direction values, keyed by direction and LDI resolution.
-type Memo<T> = Mutex<HashMap<(SourceKey, u32), T>>;
 
 /// How a caller steers a long run: `stop` is polled between batches of days (set it from
 /// a Ctrl-C handler); `progress(done, total)` is called after each batch.
@@ -199,7 +189,7 @@ pub fn run_annual(
         ..AnnualReport::default()
     };
     // Plan: records in the date range, grouped by day; this shard's days.
-    let mut days: Vec<Vec<Step>> = Vec::new();
+    let mut days: Vec<Vec<Planned>> = Vec::new();
     let mut day_index = 0usize;
     let mut last: Option<NaiveDate> = None;
     for r in &weather.records {
@@ -217,7 +207,7 @@ pub fn run_annual(
             }
         }
         if day_index % n as usize == (k - 1) as usize {
-            days.last_mut().expect("pushed above").push(Step {
+            days.last_mut().expect("pushed above").push(Planned {
                 record: r,
                 time: r.time,
             });
@@ -232,30 +222,24 @@ pub fn run_annual(
     let (mut w_sun, done_sun) = IlluminanceWriter::resume(&out.join("direct_sun.csv"), sensors)?;
     // The interreflection operator (geometry only, cached) is needed before resuming when
     // surfaces are asked for: its mesh defines their columns.
-    let dirs = Directions::new(scene, quality, store);
-    let needs_radiosity = scene.triangles.iter().any(|t| {
-        let m = &scene.materials[t.material as usize];
-        m.reflectance().max_element() > 0.0 || m.is_emitter()
-    });
-    let mut stage = Stages::default();
-    let ts = Instant::now();
-    let operator = if (needs_radiosity && !scene.sensors.is_empty()) || opts.surfaces {
-        let (t, cached) = super::operator::transport(scene, &quality.transport, store);
-        report.operator_from_cache = cached;
-        Some(t)
-    } else {
+    let engine = Engine::new(
+        scene,
+        quality,
+        store,
+        &EngineOptions {
+            surfaces: opts.surfaces,
+            response_max_bytes: opts.response_max_bytes,
+        },
+    );
+    report.operator_from_cache = engine.operator_from_cache();
+    if engine.operator().is_none() {
         report.skipped.push(
             "interreflection: every surface is black and nothing emits, or no sensors".into(),
         );
-        None
-    };
-    stage.add("operator", ts.elapsed().as_secs_f64());
-    let surface_map = match (&operator, opts.surfaces) {
-        (Some(op), true) => Some(SurfaceMap::new(scene, op)),
-        _ => None,
-    };
+    }
+    let surface_map = engine.surfaces();
     let surfaces_path = out.join("surfaces.csv");
-    let (mut w_surf, done_surf) = match &surface_map {
+    let (mut w_surf, done_surf) = match surface_map {
         Some(m) => {
             let (w, t) =
                 IlluminanceWriter::resume_with_header(&surfaces_path, m.header(), m.columns())?;
@@ -300,7 +284,7 @@ pub fn run_annual(
             }
             w_total.checkpoint()?;
             w_sun.checkpoint()?;
-            if let Some(m) = &surface_map {
+            if let Some(m) = surface_map {
                 let (_, fv) =
                     export::read_illuminance_csv(&IlluminanceWriter::partial_path(&surfaces_path))?;
                 let mut w =
@@ -315,35 +299,13 @@ pub fn run_annual(
         report.resumed = i;
     }
 
-    let ts = Instant::now();
-    // Surfaces read the mesh solution, which only forward solves have.
-    let response = operator
-        .as_ref()
-        .filter(|_| surface_map.is_none())
-        .and_then(|op| op.response(opts.response_max_bytes));
-    report.interreflection = match (&operator, &response) {
-        (None, _) => "none",
-        (Some(_), Some(_)) => "adjoint",
-        (Some(_), None) => "forward",
-    }
-    .into();
-    if let Some(r) = &response {
-        stage.add("sensor_response", ts.elapsed().as_secs_f64());
-        report.sweeps += r.sweeps;
-    }
-    let mesh_memo: Memo<MeshWeights> = Mutex::new(HashMap::new());
-    let dc_memo: Memo<Arc<DirectionResponse>> = Mutex::new(HashMap::new());
+    report.interreflection = engine.interreflection().into();
+    report.sweeps += engine.response_sweeps();
     let ctx = Ctx {
         scene,
         weather,
-        quality,
-        dirs: &dirs,
-        operator: operator.as_ref(),
-        response: response.as_ref(),
-        surfaces: surface_map.as_ref(),
-        mesh_memo: &mesh_memo,
-        dc_memo: &dc_memo,
-        stages: Mutex::new(Stages::default()),
+        engine: &engine,
+        stages: Mutex::new(engine.setup_times().clone()),
     };
     let mut done = report.resumed;
     progress(done, total_steps);
@@ -405,12 +367,10 @@ pub fn run_annual(
         report.median_relative_err = errs[errs.len() / 2] as f64;
         report.p95_relative_err = errs[errs.len() * 95 / 100] as f64;
     }
-    report.directions = dirs.counts();
+    report.directions = engine.directions().counts();
     report.cache = store.stats();
     report.warnings.extend(store.warnings());
-    let mut st = ctx.stages.into_inner().expect("stages lock");
-    st.merge(stage);
-    report.stage_seconds = st.0;
+    report.stage_seconds = ctx.stages.into_inner().expect("stages lock").0;
     if !report.interrupted {
         w_total.finish()?;
         w_sun.finish()?;
@@ -532,13 +492,11 @@ enum Kind {
     Day { sun: bool },
 }
 
-fn classify(scene: &Scene, s: &Step) -> Kind {
+fn classify(scene: &Scene, s: &Planned) -> Kind {
     if s.record.missing {
         return Kind::Missing;
     }
-    let utc =
-        (s.time - chrono::TimeDelta::seconds((scene.site.utc_offset_h * 3600.0) as i64)).and_utc();
-    let sun = solar_position(utc, &scene.site);
+    let sun = solar_position(local_to_utc(s.time, scene.site.utc_offset_h), &scene.site);
     if s.record.dhi <= 0.0 && (s.record.dni <= 0.0 || sun.altitude_deg() <= 0.0) {
         return Kind::Night;
     }
@@ -547,240 +505,75 @@ fn classify(scene: &Scene, s: &Step) -> Kind {
     }
 }
 
-/// Stage wall times.
-#[derive(Default)]
-struct Stages(Vec<(String, f64)>);
-
-impl Stages {
-    fn add(&mut self, name: &str, s: f64) {
-        match self.0.iter_mut().find(|(n, _)| n == name) {
-            Some((_, v)) => *v += s,
-            None => self.0.push((name.into(), s)),
-        }
-    }
-    fn merge(&mut self, o: Stages) {
-        for (n, s) in o.0 {
-            self.add(&n, s);
-        }
-    }
-}
-
 struct Ctx<'a> {
     scene: &'a Scene,
     weather: &'a Weather,
-    quality: &'a Quality,
-    dirs: &'a Directions<'a>,
-    operator: Option<&'a Transport>,
-    response: Option<&'a SensorResponse>,
-    surfaces: Option<&'a SurfaceMap>,
-    mesh_memo: &'a Memo<MeshWeights>,
-    dc_memo: &'a Memo<Arc<DirectionResponse>>,
-    stages: Mutex<Stages>,
+    engine: &'a Engine<'a>,
+    stages: Mutex<StageTimes>,
 }
 
 impl Ctx<'_> {
-    /// One day's steps: independent (in parallel) with adjoint responses, otherwise a
+    /// One day's steps: independent (in parallel) with daylight coefficients, otherwise a
     /// chain warm-started from the day's first lit step.
-    fn run_day(&self, day: &[Step]) -> Result<Vec<StepOut>> {
-        if self.response.is_some() {
+    fn run_day(&self, day: &[Planned]) -> Result<Vec<StepOut>> {
+        if self.engine.steps_are_independent() {
             return day
                 .par_iter()
-                .map(|s| {
-                    let mut st = Stages::default();
-                    let o = self.run_step(s, &mut None, &mut st);
-                    self.stages.lock().expect("stages lock").merge(st);
-                    o
-                })
+                .map(|s| self.run_step(s, &mut None))
                 .collect();
         }
         let mut state: Option<TransportState> = None;
-        let mut st = Stages::default();
-        let mut outs = Vec::with_capacity(day.len());
-        for s in day {
-            let o = self.run_step(s, &mut state, &mut st)?;
-            outs.push(o);
-        }
-        self.stages.lock().expect("stages lock").merge(st);
-        Ok(outs)
+        day.iter().map(|s| self.run_step(s, &mut state)).collect()
     }
 
-    fn run_step(
-        &self,
-        s: &Step,
-        state: &mut Option<TransportState>,
-        st: &mut Stages,
-    ) -> Result<StepOut> {
+    fn run_step(&self, s: &Planned, state: &mut Option<TransportState>) -> Result<StepOut> {
         let n = self.scene.sensors.len();
-        let zeros = || StepOut {
-            total: vec![0.0; n],
-            sun: vec![0.0; n],
-            surfaces: vec![0.0; self.surfaces.map_or(0, |m| m.columns())],
-            ..StepOut::default()
-        };
         if !matches!(classify(self.scene, s), Kind::Day { .. }) {
-            return Ok(zeros());
+            return Ok(StepOut {
+                total: vec![0.0; n],
+                sun: vec![0.0; n],
+                surfaces: vec![0.0; self.engine.surfaces().map_or(0, |m| m.columns())],
+                ..StepOut::default()
+            });
         }
-        let t = Instant::now();
         let r = s.record;
-        let utc = (s.time
-            - chrono::TimeDelta::seconds((self.scene.site.utc_offset_h * 3600.0) as i64))
-        .and_utc();
-        let sun = solar_position(utc, &self.scene.site);
+        let at = StepTime {
+            utc: local_to_utc(s.time, self.scene.site.utc_offset_h),
+            local: s.time,
+        };
         let spec = SkySpec::Perez {
             dni: r.dni,
             dhi: r.dhi,
             dew_point_c: r.dew_point_c,
         };
-        let sky = build_sky(&spec, &sun, s.time.ordinal(), self.scene.ground_reflectance).map_err(
-            |e| {
+        let step = self
+            .engine
+            .step(&at, &spec, state.as_ref(), false)
+            .map_err(|e| {
                 Error::input(
                     &self.weather.path,
                     Some(r.line),
                     Some(&format!("DNI {} DHI {}", r.dni, r.dhi)),
                     format!("cannot build the Perez sky: {e}"),
                 )
-            },
-        )?;
-        let (sources, _, _) = sources_for(&sky, self.quality);
-        st.add("sky", t.elapsed().as_secs_f64());
-        let t = Instant::now();
-        let data = self.dirs.get_all(&sources);
-        st.add("directions", t.elapsed().as_secs_f64());
-        let t = Instant::now();
-        let direct = sensors_from_responses(self.dirs, &sources, &data);
-        st.add("sensors_direct", t.elapsed().as_secs_f64());
-        let mut out = StepOut {
-            total: Vec::with_capacity(n),
-            sun: Vec::with_capacity(n),
-            surfaces: Vec::new(),
-            rel_err: Vec::with_capacity(n),
-            sweeps: 0,
-        };
-        let indirect = match (self.operator, self.response) {
-            (Some(op), Some(resp)) => {
-                let t = Instant::now();
-                let mut acc = resp.start();
-                for (src, d) in sources.iter().zip(&data) {
-                    let dc = self.coefficients(op, resp, src, &d.record);
-                    resp.add(&mut acc, src.normal_irradiance, &dc);
-                }
-                st.add("daylight_coefficients", t.elapsed().as_secs_f64());
-                let t = Instant::now();
-                let ind = resp.sensors_of(&acc);
-                st.add("interreflection", t.elapsed().as_secs_f64());
-                ind
-            }
-            (Some(op), None) => {
-                let t = Instant::now();
-                let mut e = vec![Rgb::ZERO; op.rows()];
-                let mut et = vec![
-                    Rgb::ZERO;
-                    if self.surfaces.is_some() {
-                        op.rows()
-                    } else {
-                        0
-                    }
-                ];
-                for (src, d) in sources.iter().zip(&data) {
-                    let res = self.quality.projection.resolution_for(src.is_sun());
-                    let w = self.mesh_weights(op, src, res, &d.record);
-                    for &(row, wt) in w.iter() {
-                        e[row as usize] += src.normal_irradiance * wt;
-                    }
-                    if let Some(m) = self.surfaces {
-                        m.add_transmitted(&mut et, src, &w, self.scene);
-                    }
-                }
-                st.add("mesh_irradiance", t.elapsed().as_secs_f64());
-                let t = Instant::now();
-                let (next, rep) = op.solve(&e, state.as_ref());
-                out.sweeps = rep.sweeps;
-                let ind = op.sensors(&next);
-                if let Some(m) = self.surfaces {
-                    let sin_alt = sun.altitude_deg().to_radians().sin();
-                    let k = SurfaceMap::solar_scale(&sources, r.dni, r.dhi, sin_alt);
-                    out.surfaces = m.values(op, Some(&next), &e, &et, k);
-                }
-                *state = Some(next);
-                st.add("interreflection", t.elapsed().as_secs_f64());
-                ind
-            }
-            (None, _) => Vec::new(),
-        };
-        for (k, d) in direct.iter().enumerate() {
-            let (i, ie) = indirect.get(k).map_or((0.0, 0.0), |x| {
-                (lux(x.irradiance), lux(x.std_err) + lux(x.discretisation))
-            });
-            let total = lux(d.sun + d.sky) + i;
-            let err = d.visibility_err_lux
-                + lux(d.radiance_error).abs()
-                + SKY_NORMALISATION_REL * total
-                + ie;
-            out.total.push(total);
-            out.sun.push(lux(d.sun));
-            if total > 10.0 {
-                out.rel_err.push((err / total) as f32);
-            }
-        }
-        Ok(out)
-    }
-
-    /// Daylight coefficients of one direction (memoised per run).
-    fn coefficients(
-        &self,
-        op: &Transport,
-        resp: &SensorResponse,
-        src: &Source,
-        record: &crate::projection::DirectionRecord,
-    ) -> Arc<DirectionResponse> {
-        let res = self.quality.projection.resolution_for(src.is_sun());
-        let key = (src.key, res);
-        if let Some(d) = self.dc_memo.lock().expect("dc memo").get(&key) {
-            return d.clone();
-        }
-        let w = self.mesh_weights(op, src, res, record);
-        let d = Arc::new(resp.direction(op, &w));
-        self.dc_memo
+            })?;
+        self.stages
             .lock()
-            .expect("dc memo")
-            .entry(key)
-            .or_insert(d)
-            .clone()
-    }
-
-    /// Row weights of one direction on the operator's mesh (its record's leaf weights,
-    /// area-averaged onto the rows), computed once per direction and run.
-    fn mesh_weights(
-        &self,
-        op: &Transport,
-        src: &Source,
-        res: u32,
-        record: &crate::projection::DirectionRecord,
-    ) -> MeshWeights {
-        let key = (src.key, res);
-        if let Some(w) = self.mesh_memo.lock().expect("mesh memo").get(&key) {
-            return w.clone();
+            .expect("stages lock")
+            .merge(&step.report.stage_seconds);
+        if step.state.is_some() {
+            *state = step.state;
         }
-        let mut h = Hierarchy::new(self.scene);
-        let unit = Source {
-            normal_irradiance: Rgb::ONE,
-            ..*src
-        };
-        let d = crate::transfer::transfer(&mut h, std::slice::from_ref(&unit), &[record]);
-        let e: Vec<Rgb> = d.sun.iter().zip(&d.sky).map(|(a, b)| *a + *b).collect();
-        let rows = op.mesh.average_onto(&h, &e);
-        let w: MeshWeights = Arc::new(
-            rows.into_iter()
-                .enumerate()
-                .filter(|(_, v)| *v != Rgb::ZERO)
-                .map(|(r, v)| (r as u32, v))
+        Ok(StepOut {
+            total: step.sensors.iter().map(|v| v.lux).collect(),
+            sun: step.sensors.iter().map(|v| v.lux_sun).collect(),
+            surfaces: step.surfaces,
+            rel_err: step
+                .sensors
+                .iter()
+                .filter_map(|v| v.relative_error(10.0).map(|e| e as f32))
                 .collect(),
-        );
-        self.mesh_memo
-            .lock()
-            .expect("mesh memo")
-            .entry(key)
-            .or_insert(w)
-            .clone()
+            sweeps: step.report.transport_solve.map_or(0, |t| t.sweeps),
+        })
     }
 }

@@ -43,6 +43,19 @@ pub enum SkySpec {
     None,
 }
 
+impl SkySpec {
+    /// Direct-normal and diffuse-horizontal irradiance (W/m²) the sky is normalised to,
+    /// where it has them (Preetham's absolute sky has none).
+    pub fn irradiance(&self) -> Option<(f64, f64)> {
+        match *self {
+            SkySpec::Perez { dni, dhi, .. } | SkySpec::Cie { dni, dhi, .. } => Some((dni, dhi)),
+            SkySpec::CieOvercast { dhi } => Some((0.0, dhi)),
+            SkySpec::Preetham { .. } => None,
+            SkySpec::None => Some((0.0, 0.0)),
+        }
+    }
+}
+
 /// Every knob of a run, grouped by pipeline step.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Quality {

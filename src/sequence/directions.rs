@@ -54,6 +54,9 @@ pub struct Directions<'a> {
     store: &'a Store,
     hash: SceneHash,
     quality: Quality,
+    /// Whether directions are projected (false: sensor responses only, for the coarser
+    /// level of the error estimate, which reads no projection).
+    project: bool,
     memo: Mutex<HashMap<(SourceKey, u32), Arc<DirectionData>>>,
     built: AtomicU64,
     from_cache: AtomicU64,
@@ -64,8 +67,27 @@ impl<'a> Directions<'a> {
     /// Prepares lookups for `scene` at `quality` through `store` (use
     /// [`Store::disabled`] for no disk cache).
     pub fn new(scene: &'a Scene, quality: &Quality, store: &'a Store) -> Directions<'a> {
+        Directions::with(scene, quality, store, true)
+    }
+
+    /// As [`Self::new`], computing and caching only the sensor responses (each record's
+    /// projection is left empty): what the error estimate's coarser level needs.
+    pub fn sensors_only(scene: &'a Scene, quality: &Quality, store: &'a Store) -> Directions<'a> {
+        Directions::with(scene, quality, store, false)
+    }
+
+    fn with(
+        scene: &'a Scene,
+        quality: &Quality,
+        store: &'a Store,
+        project: bool,
+    ) -> Directions<'a> {
         let s = &quality.sensors;
         let mut extra = Vec::new();
+        if !project {
+            // Records without projections must not serve a run that reads them.
+            extra.extend_from_slice(b"sensors only");
+        }
         extra.extend_from_slice(&s.visibility_depth.to_le_bytes());
         extra.extend_from_slice(&s.visibility_tolerance.to_bits().to_le_bytes());
         extra.extend_from_slice(&s.sample_angle_deg.to_bits().to_le_bytes());
@@ -76,6 +98,7 @@ impl<'a> Directions<'a> {
             store,
             hash: cache::scene_hash(scene, &quality.projection, &extra),
             quality: *quality,
+            project,
             memo: Mutex::new(HashMap::new()),
             built: AtomicU64::new(0),
             from_cache: AtomicU64::new(0),
@@ -176,7 +199,7 @@ impl<'a> Directions<'a> {
     }
 
     fn compute(&self, source: &Source, resolution: u32) -> DirectionData {
-        let record = if self.scene.triangles.is_empty() {
+        let record = if self.scene.triangles.is_empty() || !self.project {
             DirectionRecord::default()
         } else {
             projection::project(

@@ -1,43 +1,23 @@
-//! One instant: sky → sources → projections (LDI, VR refinement) → direct transfer →
-//! sensors, with a discretisation-error estimate from one coarser level.
+//! One instant (`daystep instant`): a sequence of one [`Engine::step`], with its report and
+//! outputs (`sensors.csv`, `report.json`).
 
 use super::config::{Quality, SkySpec};
-use super::directions::{DirectionData, Directions};
-use super::report::{Counts, Report, StageTimes, SunReport};
+use super::report::Report;
+use super::step::{Engine, EngineOptions, Step, StepTime};
+use crate::cache::Store;
 use crate::error::{Error, Result};
 use crate::hierarchy::Hierarchy;
-use crate::photometry::lux;
-use crate::projection::{self, DirectionRecord, ProjectionScene};
-use crate::radiosity::{Transport, TransportSensor, TransportState};
+use crate::radiosity::{Transport, TransportState};
 use crate::scene::Scene;
-use crate::sensors::SensorDirect;
-use crate::site::solar_position::{solar_position, SolarPosition};
-use crate::sky::{self, Sky};
-use crate::sources::{self, Source, SourceKey};
-use crate::transfer::{self, DirectIrradiance};
-use chrono::{DateTime, Datelike, NaiveDateTime, Utc};
-use rayon::prelude::*;
+use crate::sky::Sky;
+use crate::sources::Source;
+use crate::transfer::DirectIrradiance;
+use chrono::{DateTime, NaiveDateTime, Utc};
 use std::path::Path;
 use std::time::Instant;
 
-/// Relative accuracy of the sky models' normalisation quadrature (`sky::integrate_horizontal`
-/// against fine grids: about 1e-4); part of every stated error.
-pub const SKY_NORMALISATION_REL: f64 = 2e-4;
-
-/// Illuminance at one sensor.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct SensorValue {
-    /// Total direct illuminance (sun + sky + ground glow), lux.
-    pub lux: f64,
-    /// Estimated absolute error of `lux`, lux.
-    pub lux_err: f64,
-    /// From the sun, lux.
-    pub lux_sun: f64,
-    /// From the sky and ground glow, lux.
-    pub lux_sky: f64,
-    /// Reflected by the scene's surfaces (and emitted by `Ke` surfaces), lux.
-    pub lux_indirect: f64,
-}
+pub use super::estimate::{SensorValue, SKY_NORMALISATION_REL};
+pub use super::sky::build_sky;
 
 /// Everything one instant produces.
 pub struct InstantResult {
@@ -47,7 +27,7 @@ pub struct InstantResult {
     pub hierarchy: Hierarchy,
     /// Direct irradiance per element.
     pub direct: DirectIrradiance,
-    /// The global-line operator and its solution, when that solver ran.
+    /// The global-line operator and its solution, when the scene needed interreflection.
     pub transport: Option<(Transport, TransportState)>,
     /// The sources used.
     pub sources: Vec<Source>,
@@ -55,317 +35,33 @@ pub struct InstantResult {
     pub report: Report,
 }
 
-/// Builds the sky of `spec` for the sun at `sun`.
-///
-/// # Errors
-/// Bad sky parameters ([`Error::Input`]).
-pub fn build_sky(
-    spec: &SkySpec,
-    sun: &SolarPosition,
-    day_of_year: u32,
-    ground: f64,
-) -> Result<Sky> {
-    let d = sun.direction();
-    match *spec {
-        SkySpec::Perez {
-            dni,
-            dhi,
-            dew_point_c,
-        } => sky::perez::sky(
-            dni,
-            dhi,
-            d,
-            day_of_year,
-            dew_point_c.unwrap_or(sky::perez::DEFAULT_DEW_POINT_C),
-            ground,
-        ),
-        SkySpec::CieOvercast { dhi } => sky::cie::sky(
-            sky::cie::CieSkyType::TraditionalOvercast,
-            dhi,
-            0.0,
-            d,
-            ground,
-        ),
-        SkySpec::Cie { sky_type, dhi, dni } => {
-            sky::cie::sky(sky::cie::CieSkyType::General(sky_type), dhi, dni, d, ground)
+impl InstantResult {
+    fn of(engine: Engine, step: Step) -> InstantResult {
+        let (hierarchy, direct) = step.elements.expect("an instant asks for its elements");
+        InstantResult {
+            sensors: step.sensors,
+            hierarchy,
+            direct,
+            transport: engine.into_operator().zip(step.state),
+            sources: step.sources,
+            report: step.report,
         }
-        SkySpec::Preetham { turbidity } => sky::preetham::sky(turbidity, d, ground),
-        SkySpec::None => Ok(Sky::none()),
     }
 }
 
-pub(crate) fn sources_for(sky: &Sky, q: &Quality) -> (Vec<Source>, usize, Option<f64>) {
-    let s = sources::sky_sources(sky, &q.sky);
-    let mut list = s.sources;
-    let mut err = None;
-    if let Some((sun, e)) = sources::sun_source(sky, q.sun_spacing_deg) {
-        list.push(sun);
-        err = Some(e);
-    }
-    (list, s.negligible, err)
-}
-
-/// One LDI projection and VR refinement per source, in parallel; records in source order.
-pub fn project_sources(
-    scene: &Scene,
-    sources: &[Source],
-    quality: &Quality,
-) -> Vec<DirectionRecord> {
-    if scene.triangles.is_empty() {
-        return vec![DirectionRecord::default(); sources.len()];
-    }
-    let pscene = ProjectionScene::new(scene);
-    sources
-        .par_iter()
-        .map(|s| {
-            let res = quality.projection.resolution_for(s.is_sun());
-            projection::project(&pscene, s.direction, res, &quality.projection)
-        })
-        .collect()
-}
-
-/// The sun and sky shoot alone (paper §4–5): sources, projections and direct transfer.
-/// Returns the sources, the refined hierarchy and each element's direct irradiance — what
-/// a time-step loop feeds to [`Transport::solve`] (after averaging onto its mesh).
-pub fn direct_light(
-    scene: &Scene,
-    sky: &Sky,
-    quality: &Quality,
-) -> (Vec<Source>, Hierarchy, DirectIrradiance) {
-    let (sources, _, _) = sources_for(sky, quality);
-    let records = project_sources(scene, &sources, quality);
-    let mut hierarchy = Hierarchy::new(scene);
-    let refs: Vec<&DirectionRecord> = records.iter().collect();
-    let direct = transfer::transfer(&mut hierarchy, &sources, &refs);
-    (sources, hierarchy, direct)
-}
-
-/// Runs one instant on `scene` for the sky `sky` (already built for the instant), without
-/// a disk cache.
+/// Runs one instant on `scene` for the sky `sky` (already built for the instant: stages 2–7
+/// of the step), without a disk cache. `report` carries what the caller knows (sun, sky).
 pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report) -> InstantResult {
-    let store = crate::cache::Store::disabled();
-    let dirs = Directions::new(scene, quality, &store);
-    let coarse = Directions::new(scene, &quality.coarser(), &store);
-    run_sky_with(scene, sky, &dirs, &coarse, report)
+    let store = Store::disabled();
+    let engine = Engine::new(scene, quality, &store, &EngineOptions::default());
+    let mut r = std::mem::take(report);
+    r.warnings.extend(engine.directions().store().warnings());
+    let step = engine.step_sky(sky, None, true, r, None);
+    InstantResult::of(engine, step)
 }
 
-/// Direct irradiance of every sensor from the sources' cached responses: sky and ground
-/// nodes as Σ_children L_c ⊙ response_c, the sun as E_n ⊙ transmission × cos θ (true sun
-/// direction), with the visibility uncertainty and the per-child-vs-node radiance
-/// difference as error terms.
-pub fn sensors_from_responses(
-    dirs: &Directions,
-    sources: &[Source],
-    data: &[std::sync::Arc<DirectionData>],
-) -> Vec<SensorDirect> {
-    let scene = dirs.scene();
-    (0..scene.sensors.len())
-        .map(|k| {
-            let n = scene.sensors[k].normal;
-            let mut out = SensorDirect::default();
-            for (s, d) in sources.iter().zip(data) {
-                let r = &d.sensors[k];
-                out.rays += d.rays / scene.sensors.len().max(1) as u64;
-                if s.vertices.is_none() {
-                    let cos = n.dot(s.true_direction);
-                    if cos > 0.0 {
-                        out.sun += s.normal_irradiance * dirs.sun_transmission(k, s, r) * cos;
-                    }
-                    continue;
-                }
-                for c in 0..4 {
-                    let fine = s.child_radiance[c] * r.child[c];
-                    out.sky += fine;
-                    out.radiance_error += fine - s.radiance * r.child[c];
-                    out.visibility_err_lux += lux(s.child_radiance[c]) * r.uncertainty[c];
-                }
-            }
-            out
-        })
-        .collect()
-}
-
-/// [`run_sky`] through per-direction data `dirs` (the run's quality and cache) and
-/// `coarse` (the same one level coarser, for the error estimate).
-pub fn run_sky_with(
-    scene: &Scene,
-    sky: &Sky,
-    dirs: &Directions,
-    coarse_dirs: &Directions,
-    report: &mut Report,
-) -> InstantResult {
-    let quality = dirs.quality();
-    let mut times = std::mem::take(&mut report.stage_seconds);
-    let (sources, negligible, snap_err) = times.time("sources", || sources_for(sky, quality));
-    let mut counts = Counts {
-        negligible_sources: negligible,
-        elements_before: scene.triangles.len(),
-        sensors: scene.sensors.len(),
-        degenerate_triangles_dropped: scene.dropped_degenerate,
-        ..Counts::default()
-    };
-    for s in &sources {
-        match s.key {
-            SourceKey::Sky(_) => counts.sky_sources += 1,
-            SourceKey::Ground(_) => counts.ground_sources += 1,
-            SourceKey::Sun(_) => counts.sun_sources += 1,
-        }
-    }
-    if sources.is_empty() {
-        report
-            .skipped
-            .push("all projections: the sky emits nothing at this instant".into());
-    }
-    if !scene.has_glazing() {
-        report
-            .skipped
-            .push("glazing transmission: the scene has no glazing".into());
-    }
-    let (lo, hi) = scene.bounds();
-    let diagonal = if scene.triangles.is_empty() {
-        0.0
-    } else {
-        (hi - lo).length()
-    };
-    if let Some(e) = snap_err {
-        report.sun.used = true;
-        report.sun.snapping_error_deg = e;
-        report.sun.max_shadow_shift_m = diagonal * e.to_radians();
-    }
-
-    let data = times.time("directions", || dirs.get_all(&sources));
-    let records: Vec<&DirectionRecord> = data.iter().map(|d| &d.record).collect();
-    if scene.triangles.is_empty() {
-        report
-            .skipped
-            .push("projections: the scene has no geometry".into());
-    }
-    for (s, r) in sources.iter().zip(&records) {
-        counts.ldi_pixels += r.stats.width as u64 * r.stats.height as u64;
-        counts.ldi_fragments += r.stats.fragments;
-        counts.splits += r.stats.elements_split;
-        if r.stats.width as u64 * r.stats.height as u64
-            > counts.ldi_max_size.0 as u64 * counts.ldi_max_size.1 as u64
-        {
-            counts.ldi_max_size = (r.stats.width, r.stats.height);
-        }
-        if s.is_sun() {
-            let mut h = Hierarchy::new(scene);
-            for l in &r.leaves {
-                h.insert(l.key);
-            }
-            counts.elements_after_sun = h.leaf_count();
-        }
-    }
-    let mut hierarchy = Hierarchy::new(scene);
-    let direct = times.time("transfer", || {
-        transfer::transfer(&mut hierarchy, &sources, &records)
-    });
-    counts.elements_after = hierarchy.leaf_count();
-
-    // Interreflection, unless every surface is black and nothing emits.
-    let needs_radiosity = scene.triangles.iter().any(|t| {
-        let m = &scene.materials[t.material as usize];
-        m.reflectance().max_element() > 0.0 || m.is_emitter()
-    });
-    let mut global = None;
-    if needs_radiosity {
-        let (t, cached) = times.time("transport_build", || {
-            super::operator::transport(scene, &quality.transport, dirs.store())
-        });
-        if cached {
-            counts.operators_reused += 1;
-        }
-        let total: Vec<crate::photometry::Rgb> = direct
-            .sun
-            .iter()
-            .zip(&direct.sky)
-            .map(|(a, b)| *a + *b)
-            .collect();
-        let (st, rep) = times.time("transport_solve", || {
-            t.solve(&t.mesh.average_onto(&hierarchy, &total), None)
-        });
-        report.transport = Some(t.stats);
-        report.transport_solve = Some(rep);
-        global = Some((t, st));
-    } else {
-        report
-            .skipped
-            .push("interreflection: every surface is black and nothing emits".into());
-    }
-
-    // Sensors, and the same gather one level coarser for the error estimate.
-    let mut values = vec![SensorValue::default(); scene.sensors.len()];
-    if scene.sensors.is_empty() {
-        report
-            .skipped
-            .push("sensor gather: the scene has no sensors".into());
-    } else {
-        let fine: Vec<SensorDirect> =
-            times.time("sensors", || sensors_from_responses(dirs, &sources, &data));
-        let coarse: Vec<SensorDirect> = times.time("error_estimate", || {
-            let (cs, _, _) = sources_for(sky, coarse_dirs.quality());
-            let cdata = coarse_dirs.get_all(&cs);
-            sensors_from_responses(coarse_dirs, &cs, &cdata)
-        });
-        let indirect: Vec<TransportSensor> = match &global {
-            Some((t, st)) => times.time("indirect_gather", || t.sensors(st)),
-            None => vec![TransportSensor::default(); scene.sensors.len()],
-        };
-        for (k, (f, c)) in fine.iter().zip(&coarse).enumerate() {
-            counts.sensor_rays += f.rays + c.rays;
-            let total = lux(f.sun + f.sky);
-            let diff = (total - lux(c.sun + c.sky)).abs();
-            let ind = &indirect[k];
-            values[k] = SensorValue {
-                lux: total + lux(ind.irradiance),
-                // One coarser level bounds the error of a method converging at least
-                // linearly; partly visible nodes add their visibility range.
-                lux_err: diff
-                    + lux(f.radiance_error).abs()
-                    + f.visibility_err_lux
-                    + SKY_NORMALISATION_REL * total.abs()
-                    + lux(ind.std_err)
-                    + (lux(ind.irradiance) - lux(ind.irradiance + ind.discretisation)).abs(),
-                lux_sun: lux(f.sun),
-                lux_sky: lux(f.sky),
-                lux_indirect: lux(ind.irradiance),
-            };
-        }
-    }
-    report.error_model = "lux_err = |lux - lux at one coarser level| (sky subdivision depth and \
-        thresholds, sun grid spacing x2, visibility depth -1) + |difference between per-child and \
-        per-node sky radiance| + sum of the visibility \
-        range of partly visible nodes at the deepest split + 2e-4 x lux (sky normalisation \
-        quadrature) + the indirect part's 1-sigma noise (global lines: standard error of the mean \
-        over independent line sets and sensor rays; local lines: gather and batch spread) + its \
-        discretisation (global lines: |indirect - indirect on the mesh one level coarser|; local \
-        lines: |indirect - indirect of an independent solve with a quarter of the lines per step|)"
-        .into();
-    report.max_lux_err = values.iter().map(|v| v.lux_err).fold(0.0, f64::max);
-    report.max_relative_err = values
-        .iter()
-        .filter(|v| v.lux > 1.0)
-        .map(|v| v.lux_err / v.lux)
-        .fold(0.0, f64::max);
-    report.warnings.extend(sky.warnings.iter().cloned());
-    let dc = dirs.counts();
-    counts.ldis_built = dc.built as usize;
-    counts.ldis_reused = (dc.from_cache + dc.reused) as usize;
-    report.counts = counts;
-    report.stage_seconds = times;
-    InstantResult {
-        sensors: values,
-        hierarchy,
-        direct,
-        transport: global,
-        sources,
-        report: std::mem::take(report),
-    }
-}
-
-/// Runs one instant: `time` is local standard time of the scene's site (see
-/// [`crate::site::parse_time`]).
+/// Runs one instant: `local` is local standard time of the scene's site and `instant_utc`
+/// the same instant in UTC (see [`crate::site::parse_time`]).
 ///
 /// # Errors
 /// Bad time or sky parameters ([`Error::Input`]).
@@ -376,11 +72,11 @@ pub fn run_instant(
     spec: &SkySpec,
     quality: &Quality,
 ) -> Result<InstantResult> {
-    let store = crate::cache::Store::disabled();
-    run_instant_cached(scene, instant_utc, local, spec, quality, &store)
+    run_instant_cached(scene, instant_utc, local, spec, quality, &Store::disabled())
 }
 
-/// [`run_instant`] with projections and sensor responses read from and written to `store`.
+/// [`run_instant`] with projections, sensor responses and the operator read from and
+/// written to `store`.
 ///
 /// # Errors
 /// Bad time or sky parameters ([`Error::Input`]).
@@ -390,7 +86,7 @@ pub fn run_instant_cached(
     local: NaiveDateTime,
     spec: &SkySpec,
     quality: &Quality,
-    store: &crate::cache::Store,
+    store: &Store,
 ) -> Result<InstantResult> {
     run_instant_with_sky(scene, instant_utc, local, spec, quality, store).map(|(r, _)| r)
 }
@@ -406,46 +102,38 @@ pub fn run_instant_with_sky(
     local: NaiveDateTime,
     spec: &SkySpec,
     quality: &Quality,
-    store: &crate::cache::Store,
+    store: &Store,
 ) -> Result<(InstantResult, Sky)> {
     let t0 = Instant::now();
-    let mut report = Report {
+    let engine = Engine::new(scene, quality, store, &EngineOptions::default());
+    let at = StepTime {
+        utc: instant_utc,
+        local,
+    };
+    let mut step = engine.step(&at, spec, None, true)?;
+    let sky = step.sky.take().expect("a step builds its sky");
+    let mut report = std::mem::take(&mut step.report);
+    report.stage_seconds.merge(engine.setup_times());
+    report = Report {
         version: env!("CARGO_PKG_VERSION").into(),
         command: "instant".into(),
         scene: scene.path.display().to_string(),
         time_local: local.format("%Y-%m-%dT%H:%M:%S").to_string(),
         time_utc: instant_utc.to_rfc3339(),
         quality: quality.name.into(),
-        warnings: scene.warnings.clone(),
-        ..Report::default()
+        warnings: scene
+            .warnings
+            .iter()
+            .chain(&report.warnings)
+            .cloned()
+            .collect(),
+        ..report
     };
-    let mut times = StageTimes::default();
-    let sun = times.time("solar_position", || {
-        solar_position(instant_utc, &scene.site)
-    });
-    report.sun = SunReport {
-        altitude_deg: sun.altitude_deg(),
-        azimuth_deg: sun.azimuth_deg,
-        ..SunReport::default()
-    };
-    let sky = times.time("sky", || {
-        build_sky(spec, &sun, local.ordinal(), scene.ground_reflectance)
-    })?;
-    if sky.sun.is_none() && !matches!(spec, SkySpec::CieOvercast { .. } | SkySpec::None) {
-        report.skipped.push(format!(
-            "sun: not a source (altitude {:.2}°, or zero direct irradiance)",
-            sun.altitude_deg()
-        ));
-    }
-    report.sky = sky.description.clone();
-    report.stage_seconds = times;
-    let dirs = Directions::new(scene, quality, store);
-    let coarse = Directions::new(scene, &quality.coarser(), store);
-    let mut result = run_sky_with(scene, &sky, &dirs, &coarse, &mut report);
-    result.report.cache = Some(store.stats());
-    result.report.warnings.extend(store.warnings());
-    result.report.total_seconds = t0.elapsed().as_secs_f64();
-    Ok((result, sky))
+    report.cache = Some(store.stats());
+    report.warnings.extend(store.warnings());
+    report.total_seconds = t0.elapsed().as_secs_f64();
+    step.report = report;
+    Ok((InstantResult::of(engine, step), sky))
 }
 
 /// Writes `sensors.csv` and `report.json` into `out` (atomically, each).

@@ -1,17 +1,31 @@
-//! L8 orchestration: the one place that knows the whole order of the pipeline. A single
-//! instant is a sequence of one step.
+//! L8 orchestration: the one place that knows the whole order of the pipeline. One
+//! timestep is written once, in [`step`]; an instant is a sequence of one step, and the
+//! annual, daylight-factor and convergence runs are sequences of the same step.
+//!
+//! Modules in pipeline order: the run's knobs ([`config`]); the step's stages — sky and
+//! sources ([`sky`]), per-direction data ([`directions`]), the operator ([`operator`]),
+//! direct light onto the mesh and the sensors ([`direct`]), the stated error
+//! ([`estimate`]) — and the step that runs them ([`step`]); then the sequences built from
+//! it ([`instant`], [`df`], [`convergence`], [`annual`] with its [`surfaces`] export) and
+//! their [`report`].
 
-pub mod annual;
 pub mod config;
-pub mod convergence;
-pub mod df;
+pub mod sky;
 pub mod directions;
-pub mod instant;
 pub mod operator;
-pub mod report;
+pub mod direct;
+pub mod estimate;
+pub mod step;
+pub mod instant;
+pub mod df;
+pub mod convergence;
+pub mod annual;
 pub mod surfaces;
+pub mod report;
 
 pub use config::{Quality, SkySpec};
 pub use df::{run_df, write_df, DfResult, SensorDf};
-pub use instant::{run_instant, write_instant, InstantResult, SensorValue};
+pub use estimate::SensorValue;
+pub use instant::{run_instant, write_instant, InstantResult};
 pub use report::Report;
+pub use step::{Engine, EngineOptions, Step, StepTime};

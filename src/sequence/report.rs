@@ -8,12 +8,26 @@ use std::time::Instant;
 pub struct StageTimes(pub Vec<(String, f64)>);
 
 impl StageTimes {
-    /// Runs `f`, recording its wall time under `name`.
+    /// Runs `f`, adding its wall time to the stage `name`.
     pub fn time<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
         let t0 = Instant::now();
         let r = f();
-        self.0.push((name.to_owned(), t0.elapsed().as_secs_f64()));
+        self.add(name, t0.elapsed().as_secs_f64());
         r
+    }
+    /// Adds `seconds` to the stage `name` (appended when new): a sequence's stages sum
+    /// over its steps.
+    pub fn add(&mut self, name: &str, seconds: f64) {
+        match self.0.iter_mut().find(|(n, _)| n == name) {
+            Some((_, v)) => *v += seconds,
+            None => self.0.push((name.to_owned(), seconds)),
+        }
+    }
+    /// Adds every stage of `other` ([`Self::add`]).
+    pub fn merge(&mut self, other: &StageTimes) {
+        for (n, s) in &other.0 {
+            self.add(n, *s);
+        }
     }
     /// Sum of all stages, seconds.
     pub fn total(&self) -> f64 {

@@ -8,7 +8,7 @@
 use daystep::photometry::{lux, Rgb};
 use daystep::radiosity::{Tracer, Transport, TransportParams};
 use daystep::scene::{synthetic, Scene};
-use daystep::sequence::instant::{build_sky, direct_light};
+use daystep::sequence::instant::{build_sky, run_sky};
 use daystep::sequence::{Quality, SkySpec};
 use daystep::site::{parse_time, solar_position::solar_position};
 use std::path::Path;
@@ -24,9 +24,15 @@ fn direct(scene: &Scene, time: &str) -> (daystep::hierarchy::Hierarchy, Vec<Rgb>
     };
     use chrono::Datelike;
     let sky = build_sky(&spec, &sun, local.ordinal(), scene.ground_reflectance).unwrap();
-    let (_, h, d) = direct_light(scene, &sky, &Quality::default());
-    let e = d.sun.iter().zip(&d.sky).map(|(a, b)| *a + *b).collect();
-    (h, e)
+    let r = run_sky(scene, &sky, &Quality::default(), &mut Default::default());
+    let e = r
+        .direct
+        .sun
+        .iter()
+        .zip(&r.direct.sky)
+        .map(|(a, b)| *a + *b)
+        .collect();
+    (r.hierarchy, e)
 }
 
 /// Indirect illuminance at `sensors` (indices) by path tracing: cosine-sampled bounces,

@@ -1,0 +1,111 @@
+//! The direct stages of a step: each source's light onto the interreflection mesh (from
+//! its cached projection) and onto the sensors (from their cached responses).
+
+use super::directions::{DirectionData, Directions};
+use crate::hierarchy::Hierarchy;
+use crate::photometry::{lux, Rgb};
+use crate::projection::DirectionRecord;
+use crate::radiosity::Transport;
+use crate::scene::Scene;
+use crate::sensors::SensorDirect;
+use crate::sources::{Source, SourceKey};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+/// One direction's direct irradiance on the operator's mesh per unit normal irradiance:
+/// (row, RGB weight) for the rows it reaches.
+pub type MeshWeights = Arc<Vec<(u32, Rgb)>>;
+
+/// Mesh weights of every direction a run has met, keyed by direction and LDI resolution:
+/// a sequence transfers each direction once.
+#[derive(Default)]
+pub struct MeshMemo(Mutex<HashMap<(SourceKey, u32), MeshWeights>>);
+
+impl MeshMemo {
+    /// The weights of `src` (projected at LDI resolution `res` into `record`) on `op`'s
+    /// mesh: the record's leaf weights transferred onto a fresh hierarchy and averaged
+    /// onto the rows by area.
+    pub fn weights(
+        &self,
+        scene: &Scene,
+        op: &Transport,
+        src: &Source,
+        res: u32,
+        record: &DirectionRecord,
+    ) -> MeshWeights {
+        let key = (src.key, res);
+        if let Some(w) = self.0.lock().expect("mesh memo").get(&key) {
+            return w.clone();
+        }
+        let mut h = Hierarchy::new(scene);
+        let unit = Source {
+            normal_irradiance: Rgb::ONE,
+            ..*src
+        };
+        let d = crate::transfer::transfer(&mut h, std::slice::from_ref(&unit), &[record]);
+        let e: Vec<Rgb> = d.sun.iter().zip(&d.sky).map(|(a, b)| *a + *b).collect();
+        let rows = op.mesh.average_onto(&h, &e);
+        let w: MeshWeights = Arc::new(
+            rows.into_iter()
+                .enumerate()
+                .filter(|(_, v)| *v != Rgb::ZERO)
+                .map(|(r, v)| (r as u32, v))
+                .collect(),
+        );
+        self.0
+            .lock()
+            .expect("mesh memo")
+            .entry(key)
+            .or_insert(w)
+            .clone()
+    }
+}
+
+/// Direct irradiance of every row of the mesh (RGB W/m²): Σ over `sources` in order of
+/// E_n × the direction's weights (`weights[k]` those of `sources[k]`). The fixed order
+/// makes the sum independent of how the weights were scheduled.
+pub fn mesh_irradiance(rows: usize, sources: &[Source], weights: &[MeshWeights]) -> Vec<Rgb> {
+    let mut e = vec![Rgb::ZERO; rows];
+    for (src, w) in sources.iter().zip(weights) {
+        for &(row, wt) in w.iter() {
+            e[row as usize] += src.normal_irradiance * wt;
+        }
+    }
+    e
+}
+
+/// Direct irradiance of every sensor from the sources' cached responses: sky and ground
+/// nodes as Σ_children L_c ⊙ response_c, the sun as E_n ⊙ transmission × cos θ (true sun
+/// direction), with the visibility uncertainty and the per-child-vs-node radiance
+/// difference as error terms.
+pub fn sensors_from_responses(
+    dirs: &Directions,
+    sources: &[Source],
+    data: &[Arc<DirectionData>],
+) -> Vec<SensorDirect> {
+    let scene = dirs.scene();
+    (0..scene.sensors.len())
+        .map(|k| {
+            let n = scene.sensors[k].normal;
+            let mut out = SensorDirect::default();
+            for (s, d) in sources.iter().zip(data) {
+                let r = &d.sensors[k];
+                out.rays += d.rays / scene.sensors.len().max(1) as u64;
+                if s.vertices.is_none() {
+                    let cos = n.dot(s.true_direction);
+                    if cos > 0.0 {
+                        out.sun += s.normal_irradiance * dirs.sun_transmission(k, s, r) * cos;
+                    }
+                    continue;
+                }
+                for c in 0..4 {
+                    let fine = s.child_radiance[c] * r.child[c];
+                    out.sky += fine;
+                    out.radiance_error += fine - s.radiance * r.child[c];
+                    out.visibility_err_lux += lux(s.child_radiance[c]) * r.uncertainty[c];
+                }
+            }
+            out
+        })
+        .collect()
+}

@@ -1,0 +1,476 @@
+//! One timestep, written once: every command (`instant`, `annual`, `df`, `convergence`)
+//! runs its timesteps through [`Engine::step`], an instant being a sequence of one step.
+//!
+//! The pipeline, in order (paper §3–6):
+//! 1. solar position and sky ([`super::sky`]);
+//! 2. sources: the adaptive sky and ground nodes and the snapped sun;
+//! 3. directions: each source's LDI projection and sensor responses, cached by direction
+//!    ([`super::directions`]);
+//! 4. direct transfer onto the interreflection mesh ([`super::direct`]);
+//! 5. interreflection: a solve of the global-line operator warm-started from the previous
+//!    step, or daylight coefficients ([`crate::radiosity`]);
+//! 6. sensors: direct light from the responses, one level coarser for the error, and the
+//!    indirect gather;
+//! 7. the stated error ([`super::estimate`]).
+//!
+//! What a run reuses across its steps (directions, the operator, per-direction mesh
+//! weights) lives in the [`Engine`]; what one step produces is a [`Step`].
+
+use super::config::{Quality, SkySpec};
+use super::direct::{mesh_irradiance, sensors_from_responses, MeshMemo, MeshWeights};
+use super::directions::Directions;
+use super::estimate::{SensorValue, ERROR_MODEL};
+use super::report::{Counts, Report, StageTimes, SunReport};
+use super::sky::{build_sky, sources_for};
+use super::surfaces::SurfaceMap;
+use crate::cache::Store;
+use crate::error::Result;
+use crate::hierarchy::Hierarchy;
+use crate::photometry::Rgb;
+use crate::projection::DirectionRecord;
+use crate::radiosity::TransportState;
+use crate::radiosity::{DirectionResponse, SensorResponse, Transport, TransportSensor};
+use crate::scene::Scene;
+use crate::site::solar_position::solar_position;
+use crate::sky::Sky;
+use crate::sources::{Source, SourceKey};
+use crate::transfer::{self, DirectIrradiance};
+use chrono::{DateTime, Datelike, NaiveDateTime, Utc};
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+/// What a run asks of its steps besides sensor values.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct EngineOptions {
+    /// Per-group surface irradiance and transmitted power (`surfaces.csv`): needs the mesh
+    /// solution, so every step solves forward.
+    pub surfaces: bool,
+    /// Memory allowed for adjoint sensor responses (daylight coefficients), bytes; 0 makes
+    /// every step a warm-started forward solve.
+    pub response_max_bytes: u64,
+}
+
+/// When a step is: the instant in UTC and the site's local standard time.
+#[derive(Clone, Copy, Debug)]
+pub struct StepTime {
+    /// The instant, UTC.
+    pub utc: DateTime<Utc>,
+    /// Local standard time of the site (day of year for the sky models).
+    pub local: NaiveDateTime,
+}
+
+/// Everything one step produces.
+pub struct Step {
+    /// Per sensor, in .pts order.
+    pub sensors: Vec<SensorValue>,
+    /// The interreflection solution, to warm-start the next step (forward solves only).
+    pub state: Option<TransportState>,
+    /// Per-group surface values of the step ([`SurfaceMap::values`]; empty unless asked).
+    pub surfaces: Vec<f64>,
+    /// The sky of the step, when [`Engine::step`] built it.
+    pub sky: Option<Sky>,
+    /// The sources used.
+    pub sources: Vec<Source>,
+    /// The refined element hierarchy and each element's direct irradiance, when asked
+    /// (`detail`).
+    pub elements: Option<(Hierarchy, DirectIrradiance)>,
+    /// The step's report: sun, counts, stage times, what was skipped, the solve.
+    pub report: Report,
+}
+
+/// Memo of per-direction daylight coefficients.
+type DcMemo = Mutex<HashMap<(SourceKey, u32), Arc<DirectionResponse>>>;
+
+/// What a run keeps across its steps: the per-direction data (fine, and one level
+/// coarser for the error estimate), the interreflection operator, and per-direction mesh
+/// weights and daylight coefficients.
+pub struct Engine<'a> {
+    scene: &'a Scene,
+    dirs: Directions<'a>,
+    coarse: Directions<'a>,
+    operator: Option<Transport>,
+    operator_from_cache: bool,
+    setup: StageTimes,
+    response: Option<SensorResponse>,
+    surfaces: Option<SurfaceMap>,
+    mesh_memo: MeshMemo,
+    dc_memo: DcMemo,
+}
+
+/// Whether `scene` reflects or emits anything (otherwise there is no interreflection).
+pub fn needs_interreflection(scene: &Scene) -> bool {
+    scene.triangles.iter().any(|t| {
+        let m = &scene.materials[t.material as usize];
+        m.reflectance().max_element() > 0.0 || m.is_emitter()
+    })
+}
+
+impl<'a> Engine<'a> {
+    /// Prepares the steps of `scene` at `quality`, reading and writing cached directions
+    /// and the operator through `store`. The operator is built (or read) here, when the
+    /// scene reflects and its sensors or the surface output need it.
+    pub fn new(
+        scene: &'a Scene,
+        quality: &Quality,
+        store: &'a Store,
+        opts: &EngineOptions,
+    ) -> Engine<'a> {
+        let mut setup = StageTimes::default();
+        // The surface output needs the operator's mesh (its columns) even in a black scene.
+        let wanted = (needs_interreflection(scene) && !scene.sensors.is_empty()) || opts.surfaces;
+        let (operator, operator_from_cache) = if wanted {
+            let (t, cached) = setup.time("operator", || {
+                super::operator::transport(scene, &quality.transport, store)
+            });
+            (Some(t), cached)
+        } else {
+            (None, false)
+        };
+        let surfaces = match (&operator, opts.surfaces) {
+            (Some(op), true) => Some(SurfaceMap::new(scene, op)),
+            _ => None,
+        };
+        // Surfaces read the mesh solution, which only forward solves have.
+        let t = std::time::Instant::now();
+        let response = operator
+            .as_ref()
+            .filter(|_| surfaces.is_none())
+            .and_then(|op| op.response(opts.response_max_bytes));
+        if response.is_some() {
+            setup.add("sensor_response", t.elapsed().as_secs_f64());
+        }
+        Engine {
+            scene,
+            dirs: Directions::new(scene, quality, store),
+            coarse: Directions::sensors_only(scene, &quality.coarser(), store),
+            operator,
+            operator_from_cache,
+            setup,
+            response,
+            surfaces,
+            mesh_memo: MeshMemo::default(),
+            dc_memo: DcMemo::default(),
+        }
+    }
+
+    /// The per-direction data at the run's quality (counters, cache store).
+    pub fn directions(&self) -> &Directions<'a> {
+        &self.dirs
+    }
+
+    /// The interreflection operator, when the scene needs one.
+    pub fn operator(&self) -> Option<&Transport> {
+        self.operator.as_ref()
+    }
+
+    /// The operator, giving up the engine.
+    pub fn into_operator(self) -> Option<Transport> {
+        self.operator
+    }
+
+    /// Whether the operator was read from the cache.
+    pub fn operator_from_cache(&self) -> bool {
+        self.operator_from_cache
+    }
+
+    /// Wall time of the run's set-up (the operator; adjoint responses), seconds.
+    pub fn setup_times(&self) -> &StageTimes {
+        &self.setup
+    }
+
+    /// Gauss–Seidel sweeps of the adjoint responses' solves (0 without them).
+    pub fn response_sweeps(&self) -> u64 {
+        self.response.as_ref().map_or(0, |r| r.sweeps)
+    }
+
+    /// The surface map, when the run asked for surface output.
+    pub fn surfaces(&self) -> Option<&SurfaceMap> {
+        self.surfaces.as_ref()
+    }
+
+    /// How the steps' interreflection is computed: "adjoint", "forward" or "none".
+    pub fn interreflection(&self) -> &'static str {
+        match (&self.operator, &self.response) {
+            (None, _) => "none",
+            (Some(_), Some(_)) => "adjoint",
+            (Some(_), None) => "forward",
+        }
+    }
+
+    /// Whether steps are independent (daylight coefficients) rather than warm-started.
+    pub fn steps_are_independent(&self) -> bool {
+        self.response.is_some()
+    }
+
+    /// One timestep at `at` under the sky `spec`, warm-started from `previous` (the last
+    /// step's [`Step::state`]) when given. With `detail` the step also returns the refined
+    /// element hierarchy and its direct irradiance (a transfer of every source at once).
+    ///
+    /// # Errors
+    /// Bad sky parameters ([`crate::Error::Input`]).
+    pub fn step(
+        &self,
+        at: &StepTime,
+        spec: &SkySpec,
+        previous: Option<&TransportState>,
+        detail: bool,
+    ) -> Result<Step> {
+        let mut times = StageTimes::default();
+        let sun = times.time("solar_position", || {
+            solar_position(at.utc, &self.scene.site)
+        });
+        let sky = times.time("sky", || {
+            build_sky(
+                spec,
+                &sun,
+                at.local.ordinal(),
+                self.scene.ground_reflectance,
+            )
+        })?;
+        let mut report = Report {
+            sun: SunReport {
+                altitude_deg: sun.altitude_deg(),
+                azimuth_deg: sun.azimuth_deg,
+                ..SunReport::default()
+            },
+            sky: sky.description.clone(),
+            stage_seconds: times,
+            ..Report::default()
+        };
+        if sky.sun.is_none() && !matches!(spec, SkySpec::CieOvercast { .. } | SkySpec::None) {
+            report.skipped.push(format!(
+                "sun: not a source (altitude {:.2}°, or zero direct irradiance)",
+                sun.altitude_deg()
+            ));
+        }
+        let mut step = self.step_sky(&sky, previous, detail, report, spec.irradiance());
+        step.sky = Some(sky);
+        Ok(step)
+    }
+
+    /// [`Self::step`] for a sky already built (stages 2–7). `report` carries what the
+    /// caller knows of the step (sun position, sky, stage times so far); `dni_dhi` (W/m²)
+    /// scales the surface output to the weather record.
+    pub fn step_sky(
+        &self,
+        sky: &Sky,
+        previous: Option<&TransportState>,
+        detail: bool,
+        mut report: Report,
+        dni_dhi: Option<(f64, f64)>,
+    ) -> Step {
+        let scene = self.scene;
+        let quality = self.dirs.quality();
+        let mut times = std::mem::take(&mut report.stage_seconds);
+        let s = times.time("sources", || sources_for(sky, quality));
+        let sources = s.sources;
+        report.counts = Counts {
+            negligible_sources: s.negligible,
+            elements_before: scene.triangles.len(),
+            sensors: scene.sensors.len(),
+            degenerate_triangles_dropped: scene.dropped_degenerate,
+            operators_reused: usize::from(self.operator.is_some() && self.operator_from_cache),
+            ..Counts::default()
+        };
+        if let Some(e) = s.sun_snapping_deg {
+            report.sun.used = true;
+            report.sun.snapping_error_deg = e;
+            report.sun.max_shadow_shift_m = scene_diagonal(scene) * e.to_radians();
+        }
+        self.note_skipped(&sources, &mut report);
+
+        let data = times.time("directions", || self.dirs.get_all(&sources));
+        let records: Vec<&DirectionRecord> = data.iter().map(|d| &d.record).collect();
+        count_sources(&sources, &records, scene, &mut report.counts);
+        let elements = detail.then(|| {
+            times.time("transfer", || {
+                let mut h = Hierarchy::new(scene);
+                let d = transfer::transfer(&mut h, &sources, &records);
+                report.counts.elements_after = h.leaf_count();
+                (h, d)
+            })
+        });
+
+        // Interreflection.
+        let mut state = None;
+        let mut surfaces = Vec::new();
+        let indirect: Vec<TransportSensor> = match (&self.operator, &self.response) {
+            (Some(op), Some(resp)) => times.time("interreflection", || {
+                let mut acc = resp.start();
+                for (src, d) in sources.iter().zip(&data) {
+                    let dc = self.coefficients(op, resp, src, &d.record);
+                    resp.add(&mut acc, src.normal_irradiance, &dc);
+                }
+                resp.sensors_of(&acc)
+            }),
+            (Some(op), None) => {
+                let weights =
+                    times.time("transfer_mesh", || self.mesh_weights(op, &sources, &data));
+                let e = mesh_irradiance(op.rows(), &sources, &weights);
+                let (next, rep) = times.time("interreflection", || op.solve(&e, previous));
+                if let Some(m) = &self.surfaces {
+                    let mut et = vec![Rgb::ZERO; op.rows()];
+                    for (src, w) in sources.iter().zip(&weights) {
+                        m.add_transmitted(&mut et, src, w, scene);
+                    }
+                    let sin_alt = report.sun.altitude_deg.to_radians().sin();
+                    let k = dni_dhi.map_or(1.0, |(dni, dhi)| {
+                        SurfaceMap::solar_scale(&sources, dni, dhi, sin_alt)
+                    });
+                    surfaces = m.values(op, Some(&next), &e, &et, k);
+                }
+                let ind = times.time("indirect_gather", || op.sensors(&next));
+                report.transport = Some(op.stats);
+                report.transport_solve = Some(rep);
+                state = Some(next);
+                ind
+            }
+            (None, _) => {
+                report.skipped.push(if needs_interreflection(scene) {
+                    "interreflection: no sensors and no surface output need it".into()
+                } else {
+                    "interreflection: every surface is black and nothing emits".into()
+                });
+                vec![TransportSensor::default(); scene.sensors.len()]
+            }
+        };
+
+        // Sensors, and the same gather one level coarser for the error estimate.
+        let mut values = Vec::new();
+        if scene.sensors.is_empty() {
+            report
+                .skipped
+                .push("sensor gather: the scene has no sensors".into());
+        } else {
+            let fine = times.time("sensors", || {
+                sensors_from_responses(&self.dirs, &sources, &data)
+            });
+            let coarse = times.time("error_estimate", || {
+                let cs = sources_for(sky, self.coarse.quality()).sources;
+                let cdata = self.coarse.get_all(&cs);
+                sensors_from_responses(&self.coarse, &cs, &cdata)
+            });
+            values = fine
+                .iter()
+                .zip(&coarse)
+                .zip(&indirect)
+                .map(|((f, c), i)| {
+                    report.counts.sensor_rays += f.rays + c.rays;
+                    SensorValue::estimate(f, c, i)
+                })
+                .collect();
+        }
+        report.error_model = ERROR_MODEL.into();
+        report.max_lux_err = values.iter().map(|v| v.lux_err).fold(0.0, f64::max);
+        report.max_relative_err = values
+            .iter()
+            .filter_map(|v| v.relative_error(1.0))
+            .fold(0.0, f64::max);
+        report.warnings.extend(sky.warnings.iter().cloned());
+        let dc = self.dirs.counts();
+        report.counts.ldis_built = dc.built as usize;
+        report.counts.ldis_reused = (dc.from_cache + dc.reused) as usize;
+        report.stage_seconds = times;
+        Step {
+            sensors: values,
+            state,
+            surfaces,
+            sky: None,
+            sources,
+            elements,
+            report,
+        }
+    }
+
+    fn note_skipped(&self, sources: &[Source], report: &mut Report) {
+        if sources.is_empty() {
+            report
+                .skipped
+                .push("all projections: the sky emits nothing at this instant".into());
+        }
+        if !self.scene.has_glazing() {
+            report
+                .skipped
+                .push("glazing transmission: the scene has no glazing".into());
+        }
+        if self.scene.triangles.is_empty() {
+            report
+                .skipped
+                .push("projections: the scene has no geometry".into());
+        }
+    }
+
+    /// Every source's mesh weights, in source order (computed in parallel, memoised).
+    fn mesh_weights(
+        &self,
+        op: &Transport,
+        sources: &[Source],
+        data: &[Arc<super::directions::DirectionData>],
+    ) -> Vec<MeshWeights> {
+        sources
+            .par_iter()
+            .zip(data)
+            .map(|(src, d)| {
+                let res = self.dirs.quality().projection.resolution_for(src.is_sun());
+                self.mesh_memo.weights(self.scene, op, src, res, &d.record)
+            })
+            .collect()
+    }
+
+    /// Daylight coefficients of one direction (memoised per run).
+    fn coefficients(
+        &self,
+        op: &Transport,
+        resp: &SensorResponse,
+        src: &Source,
+        record: &DirectionRecord,
+    ) -> Arc<DirectionResponse> {
+        let res = self.dirs.quality().projection.resolution_for(src.is_sun());
+        let key = (src.key, res);
+        if let Some(d) = self.dc_memo.lock().expect("dc memo").get(&key) {
+            return d.clone();
+        }
+        let w = self.mesh_memo.weights(self.scene, op, src, res, record);
+        let d = Arc::new(resp.direction(op, &w));
+        self.dc_memo
+            .lock()
+            .expect("dc memo")
+            .entry(key)
+            .or_insert(d)
+            .clone()
+    }
+}
+
+fn scene_diagonal(scene: &Scene) -> f64 {
+    if scene.triangles.is_empty() {
+        return 0.0;
+    }
+    let (lo, hi) = scene.bounds();
+    (hi - lo).length()
+}
+
+/// Source kinds, LDI sizes and fragments, and the leaves the sun alone refines.
+fn count_sources(sources: &[Source], records: &[&DirectionRecord], scene: &Scene, c: &mut Counts) {
+    for (s, r) in sources.iter().zip(records) {
+        match s.key {
+            SourceKey::Sky(_) => c.sky_sources += 1,
+            SourceKey::Ground(_) => c.ground_sources += 1,
+            SourceKey::Sun(_) => c.sun_sources += 1,
+        }
+        let px = r.stats.width as u64 * r.stats.height as u64;
+        c.ldi_pixels += px;
+        c.ldi_fragments += r.stats.fragments;
+        c.splits += r.stats.elements_split;
+        if px > c.ldi_max_size.0 as u64 * c.ldi_max_size.1 as u64 {
+            c.ldi_max_size = (r.stats.width, r.stats.height);
+        }
+        if s.is_sun() {
+            let mut h = Hierarchy::new(scene);
+            for l in &r.leaves {
+                h.insert(l.key);
+            }
+            c.elements_after_sun = h.leaf_count();
+        }
+    }
+}
