@@ -327,7 +327,7 @@ def machine_lines(env):
 
 # Radiance settings. The reference is path traced (-aa 0: no irradiance cache, so no
 # interpolation bias); -lr 0 with -lw: Russian roulette, so long paths end without a bounce
-# limit biasing the result; -ab 16 keeps what -ab drops below the noise (measured: see README).
+# limit biasing the result; -ab 16 keeps what -ab drops below the noise (measured: see docs/validation.md).
 REFERENCE = "-ab 16 -aa 0 -as 0 -ad 32768 -lr 0 -lw 1e-6 -dj 0 -dt 0 -dc 1 -st 0"
 REFERENCE_HALF = "-ab 16 -aa 0 -as 0 -ad 16384 -lr 0 -lw 1e-6 -dj 0 -dt 0 -dc 1 -st 0"
 QUICK_REFERENCE = "-ab 12 -aa 0 -as 0 -ad 8192 -lr 0 -lw 1e-5 -dj 0 -dt 0 -dc 1 -st 0"
