@@ -214,3 +214,47 @@ fn convergence_ladder_writes_csv_plot_and_advice() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("sun snapping"), "{}", stderr(&o));
 }
+
+/// The write end of a pipe whose reader has already gone: the standard input of a process
+/// that has exited without reading it. Writes to it fail with EPIPE, deterministically.
+fn pipe_without_reader() -> std::process::Stdio {
+    use std::process::{Command, Stdio};
+    let mut reader = Command::new(env!("CARGO_BIN_EXE_daystep"))
+        .arg("--version")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::null())
+        .spawn()
+        .expect("the binary runs");
+    let write_end = reader.stdin.take().expect("piped stdin");
+    assert!(reader.wait().unwrap().success());
+    write_end.into()
+}
+
+#[test]
+fn a_closed_stdout_is_a_quiet_success() {
+    // `daystep cache stats | head -0`: the reader has gone before the report is written.
+    let dir = tempfile::tempdir().unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_daystep"))
+        .args(["cache", "stats", "--cache", dir.path().to_str().unwrap()])
+        .stdout(pipe_without_reader())
+        .output()
+        .expect("the binary runs");
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stderr(&o).is_empty(), "{}", stderr(&o));
+}
+
+#[test]
+fn a_closed_stderr_does_not_change_the_exit_code() {
+    // The error message cannot be shown, but the bad input still exits 1 (not a panic's 101).
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing.toml");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_daystep"))
+        .args(["instant", missing.to_str().unwrap()])
+        .args(["--time", "2024-06-21T12:00", "--sky", "none", "--out"])
+        .arg(dir.path().join("out"))
+        .stderr(pipe_without_reader())
+        .output()
+        .expect("the binary runs");
+    assert_eq!(o.status.code(), Some(1));
+    assert!(o.stdout.is_empty());
+}

@@ -12,11 +12,12 @@
 
 use super::config::{Quality, SkySpec};
 use super::instant::run_instant;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::export::plot::Curve;
 use crate::scene::Scene;
 use chrono::{DateTime, NaiveDateTime, Utc};
 use serde::Serialize;
+use std::path::Path;
 use std::time::Instant;
 
 /// One rung of one ladder.
@@ -348,6 +349,50 @@ pub fn recommendation(rungs: &[Rung], target: f64) -> String {
         ));
     }
     s
+}
+
+/// Writes a finished study into `out` (created if missing): `convergence.csv`,
+/// `convergence.svg` (error against time per knob, titled with `scene`) and `report.json`
+/// (the rungs, `instant` as described by the caller, the base preset, `target` and the
+/// recommendation). `target` is the relative RMS error aimed at (0.02 = 2 %). Returns the
+/// recommendation, as [`recommendation`].
+///
+/// # Errors
+/// [`crate::Error::Io`] naming the file or folder that could not be written;
+/// [`crate::Error::Internal`] when the plot or report cannot be made.
+pub fn write_convergence(
+    out: &Path,
+    scene: &Path,
+    instant: &str,
+    base: &Quality,
+    target: f64,
+    rungs: &[Rung],
+) -> Result<String> {
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    crate::files::write_atomic(&out.join("convergence.csv"), csv(rungs).as_bytes())?;
+    let title = format!(
+        "{}: error against time per knob (base `{}`, ringed)",
+        scene.display(),
+        base.name
+    );
+    crate::export::plot::error_vs_time_svg(&out.join("convergence.svg"), &title, &curves(rungs))?;
+    let advice = recommendation(rungs, target);
+    let report = serde_json::json!({
+        "version": env!("CARGO_PKG_VERSION"),
+        "scene": scene.display().to_string(),
+        "instant": instant,
+        "base": base.name,
+        "target_rel_err": target,
+        "rungs": rungs,
+        "recommendation": advice,
+    });
+    crate::files::write_atomic(
+        &out.join("report.json"),
+        serde_json::to_string_pretty(&report)
+            .map_err(|e| Error::Internal(format!("report: {e}")))?
+            .as_bytes(),
+    )?;
+    Ok(advice)
 }
 
 #[cfg(test)]

@@ -24,7 +24,7 @@ pub use resample::resample;
 
 use crate::error::{Error, Result};
 use crate::site::Site;
-use chrono::NaiveDateTime;
+use chrono::{DateTime, Datelike, NaiveDate, NaiveDateTime, TimeDelta, Utc};
 use std::path::{Path, PathBuf};
 
 /// Non-leap calendar year in which `time` is built for files without 29 February, so a
@@ -89,6 +89,63 @@ impl Weather {
     /// Number of records flagged [`WeatherRecord::missing`].
     pub fn missing_count(&self) -> usize {
         self.records.iter().filter(|r| r.missing).count()
+    }
+
+    /// The sunniest usable record at `site`: the one with the largest global horizontal
+    /// irradiance (W/m²), DNI × sin(solar altitude) + DHI, the beam counting only while the
+    /// sun is above the horizon. Missing records are skipped; of equal records the last
+    /// wins. `None` when every record is missing or there are none.
+    ///
+    /// The solar position is taken at [`WeatherRecord::utc`], as in an annual run, so this
+    /// is the step of such a run with the most daylight on a horizontal plane.
+    pub fn sunniest_record(&self, site: &Site) -> Option<&WeatherRecord> {
+        self.records
+            .iter()
+            .filter(|r| !r.missing)
+            .map(|r| {
+                let sun = crate::site::solar_position::solar_position(r.utc(site), site);
+                let beam = r.dni * sun.altitude_deg().to_radians().sin().max(0.0);
+                (beam + r.dhi, r)
+            })
+            .max_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, r)| r)
+    }
+
+    /// A warning when the file's site is more than 0.1° (latitude or longitude) from
+    /// `site`, the one a run uses; `None` when they agree.
+    ///
+    /// `sequence::annual::run_annual` reports [`Weather::warnings`]; a caller that
+    /// runs a scene on this weather pushes the warning there first, as `daystep annual`
+    /// does, so the run's report and terminal output carry it.
+    pub fn site_mismatch_warning(&self, site: &Site) -> Option<String> {
+        let ws = &self.site;
+        ((ws.latitude - site.latitude).abs() > 0.1 || (ws.longitude - site.longitude).abs() > 0.1)
+            .then(|| {
+                format!(
+                    "the weather file's site ({:.2}°, {:.2}°) differs from the scene file's ({:.2}°, {:.2}°) by more than 0.1°: using the scene file's",
+                    ws.latitude, ws.longitude, site.latitude, site.longitude
+                )
+            })
+    }
+
+    /// `date`'s month and day in the calendar year the file's times are built in (the
+    /// first record's year; [`REFERENCE_YEAR`] for a file without records), so a date
+    /// range given in any year selects the same days of a typical year. A day that year
+    /// lacks (29 February of a common year) is returned unchanged.
+    pub fn same_day_in_file_year(&self, date: NaiveDate) -> NaiveDate {
+        let year = self
+            .records
+            .first()
+            .map_or(REFERENCE_YEAR, |r| r.time.year());
+        NaiveDate::from_ymd_opt(year, date.month(), date.day()).unwrap_or(date)
+    }
+}
+
+impl WeatherRecord {
+    /// The instant of [`WeatherRecord::time`] in UTC at `site` (its standard-time offset,
+    /// truncated to whole seconds), the instant an annual run evaluates the sun at.
+    pub fn utc(&self, site: &Site) -> DateTime<Utc> {
+        (self.time - TimeDelta::seconds((site.utc_offset_h * 3600.0) as i64)).and_utc()
     }
 }
 
@@ -186,6 +243,132 @@ mod tests {
             (p, Some(1), Some("hello,world"))
         );
         assert!(shown.contains("not a weather file"), "{shown}");
+    }
+
+    /// A record at `time` (local standard time) with the given irradiances.
+    fn record(line: usize, time: &str, dni: f64, dhi: f64, missing: bool) -> WeatherRecord {
+        let time = NaiveDateTime::parse_from_str(time, "%Y-%m-%dT%H:%M").unwrap();
+        WeatherRecord {
+            line,
+            month: time.month(),
+            day: time.day(),
+            year: time.year(),
+            time,
+            dni,
+            dhi,
+            dew_point_c: None,
+            missing,
+        }
+    }
+
+    fn weather(site: Site, records: Vec<WeatherRecord>) -> Weather {
+        Weather {
+            site,
+            records,
+            path: PathBuf::from("<test>"),
+            format: WeatherFormat::Epw,
+            warnings: vec![],
+            interval_minutes: 60,
+        }
+    }
+
+    #[test]
+    fn sunniest_record_has_the_largest_global_horizontal_irradiance() {
+        // On the equator at the equinox the sun culminates near the zenith and stands about
+        // 15° high at 07:00 solar time, so the beam on the horizontal is ≈ DNI at noon and
+        // ≈ 0.26 DNI at 07:00, and nothing at midnight.
+        let site = Site {
+            latitude: 0.0,
+            longitude: 0.0,
+            utc_offset_h: 0.0,
+            elevation_m: 0.0,
+        };
+        let noon = record(1, "2021-03-20T12:00", 600.0, 0.0, false); // ≈ 600 W/m²
+        let early = record(2, "2021-03-20T07:00", 1000.0, 0.0, false); // ≈ 260 W/m²
+        let night = record(3, "2021-03-20T00:00", 3000.0, 0.0, false); // sun below: 0
+        let missing = record(4, "2021-03-21T12:00", 0.0, 5000.0, true); // skipped
+        let diffuse = record(5, "2021-03-21T09:00", 0.0, 650.0, false); // 650 W/m²
+        let all = vec![noon, early, night, missing, diffuse];
+        let w = weather(site, all.clone());
+        assert_eq!(w.sunniest_record(&site).map(|r| r.line), Some(5));
+        // Without the overcast record the noon beam wins, not the larger low-sun DNI.
+        let w = weather(site, all[..4].to_vec());
+        assert_eq!(w.sunniest_record(&site).map(|r| r.line), Some(1));
+        // Only missing records: nothing usable.
+        let w = weather(site, vec![all[3].clone()]);
+        assert_eq!(w.sunniest_record(&site), None);
+    }
+
+    #[test]
+    fn record_utc_subtracts_the_standard_time_offset() {
+        let site = Site {
+            utc_offset_h: 5.5,
+            ..Site::default()
+        };
+        let r = record(1, "2021-06-21T12:00", 0.0, 0.0, false);
+        assert_eq!(r.utc(&site).naive_utc().to_string(), "2021-06-21 06:30:00");
+    }
+
+    #[test]
+    fn site_mismatch_beyond_a_tenth_of_a_degree_warns() {
+        let file_site = Site {
+            latitude: 10.0,
+            longitude: 20.0,
+            ..Site::default()
+        };
+        let w = weather(file_site, vec![]);
+        let near = Site {
+            latitude: 10.09,
+            longitude: 19.91,
+            ..file_site
+        };
+        assert_eq!(w.site_mismatch_warning(&near), None);
+        for far in [
+            Site {
+                latitude: 10.2,
+                ..file_site
+            },
+            Site {
+                longitude: 19.8,
+                ..file_site
+            },
+        ] {
+            let text = w.site_mismatch_warning(&far).expect("a warning");
+            assert!(text.contains("(10.00°, 20.00°)"), "{text}");
+            let scene = format!("({:.2}°, {:.2}°)", far.latitude, far.longitude);
+            assert!(text.contains(&scene), "{text}");
+        }
+    }
+
+    #[test]
+    fn dates_move_into_the_file_year() {
+        let date = |s: &str| NaiveDate::parse_from_str(s, "%Y-%m-%d").unwrap();
+        let leap = weather(
+            Site::default(),
+            vec![record(1, "2020-01-01T00:30", 0.0, 0.0, false)],
+        );
+        assert_eq!(
+            leap.same_day_in_file_year(date("2024-02-29")),
+            date("2020-02-29")
+        );
+        assert_eq!(
+            leap.same_day_in_file_year(date("1999-07-04")),
+            date("2020-07-04")
+        );
+        // A common year lacks 29 February: the date is kept as given.
+        let common = weather(
+            Site::default(),
+            vec![record(1, "2021-01-01T00:30", 0.0, 0.0, false)],
+        );
+        assert_eq!(
+            common.same_day_in_file_year(date("2024-02-29")),
+            date("2024-02-29")
+        );
+        let empty = weather(Site::default(), vec![]);
+        assert_eq!(
+            empty.same_day_in_file_year(date("2024-05-01")),
+            NaiveDate::from_ymd_opt(REFERENCE_YEAR, 5, 1).unwrap()
+        );
     }
 
     #[test]

@@ -1,0 +1,116 @@
+//! `daystep annual`: a time series over a weather file, resumable, with a progress bar on
+//! a terminal and a Ctrl-C that stops after the days in flight.
+
+use super::args::AnnualArgs;
+use super::config;
+use super::messages::{note, warnings};
+use crate::error::{Error, Result};
+use crate::scene::Scene;
+use crate::sequence::annual::{AnnualOptions, RunControl};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+/// A flag set by the first Ctrl-C; a second one kills the process (exit 130) while the
+/// batch in flight finishes.
+fn stop_on_ctrl_c() -> Arc<AtomicBool> {
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    let _ = ctrlc::set_handler(move || {
+        if flag.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        note!("\nstopping after the current days (Ctrl-C again to abort)…");
+    });
+    stop
+}
+
+/// A progress bar when standard error is a terminal.
+fn progress_bar() -> Option<indicatif::ProgressBar> {
+    std::io::IsTerminal::is_terminal(&std::io::stderr()).then(|| {
+        let b = indicatif::ProgressBar::new(0);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} steps {per_sec} ETA {eta}",
+            )
+            .expect("valid template"),
+        );
+        b
+    })
+}
+
+/// Runs `daystep annual` into `--out`; a rerun with the same folder continues.
+///
+/// # Errors
+/// Bad arguments, scene or weather file ([`Error::Input`]), unwritable output;
+/// [`Error::Interrupted`] after Ctrl-C, once the finished days are written.
+pub fn run(a: AnnualArgs) -> Result<()> {
+    let q = config::quality(&a.quality, a.seed)?;
+    let shard = config::shard(a.shard.as_deref())?;
+    let scene = Scene::load(&a.scene)?;
+    warnings(&scene.warnings);
+    let mut weather = crate::weather::read_weather(&a.weather)?;
+    if let Some(step) = a.step {
+        weather = crate::weather::resample(&weather, step)?;
+    }
+    if let Some(w) = weather.site_mismatch_warning(&scene.site) {
+        weather.warnings.push(w);
+    }
+    let day = |flag: &str, v: &Option<String>| -> Result<_> {
+        v.as_deref()
+            .map(|v| config::date(flag, v).map(|d| weather.same_day_in_file_year(d)))
+            .transpose()
+    };
+    let opts = AnnualOptions {
+        start: day("--start", &a.start)?,
+        end: day("--end", &a.end)?,
+        shard,
+        metrics: config::metric_params(&a.metrics),
+        ill: a.ill,
+        surfaces: a.surfaces,
+        ..AnnualOptions::default()
+    };
+    opts.metrics.validate()?;
+    warnings(&weather.warnings);
+    let store = config::store(&a.cache, a.no_cache);
+    let stop = stop_on_ctrl_c();
+    let bar = progress_bar();
+    let progress = |done: usize, total: usize| {
+        if let Some(b) = &bar {
+            b.set_length(total as u64);
+            b.set_position(done as u64);
+        }
+    };
+    let control = RunControl {
+        stop: &stop,
+        progress: &progress,
+    };
+    let r =
+        crate::sequence::annual::run_annual(&scene, &weather, &q, &store, &a.out, &opts, &control)?;
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    warnings(&r.warnings);
+    if r.interrupted {
+        note!(
+            "daystep annual: interrupted after {} of {} steps; finished days are kept in {}. To continue, run the same command again.",
+            r.resumed + r.computed,
+            r.steps,
+            a.out.display()
+        );
+        return Err(Error::Interrupted);
+    }
+    note!(
+        "daystep annual: {} steps ({} computed, {} resumed; {} night, {} missing skipped), {} directions built, {} from cache, {:.1} s; median stated error {:.2} %; wrote {}",
+        r.steps,
+        r.computed,
+        r.resumed,
+        r.night,
+        r.missing,
+        r.directions.built,
+        r.directions.from_cache,
+        r.total_seconds,
+        100.0 * r.median_relative_err,
+        a.out.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,301 @@
+//! The raw command line, as clap parses it: flags, defaults and help text and nothing
+//! else. [`super::config`] turns these strings and numbers into library values.
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+/// daystep: incremental time-series daylight engine.
+#[derive(Parser, Debug)]
+#[command(name = "daystep", version, about, long_about = None)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+    /// Worker threads (default: all cores). Results do not depend on it.
+    #[arg(long, global = true)]
+    pub threads: Option<usize>,
+}
+
+/// Sky models for `--sky`.
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum SkyArg {
+    /// Perez all-weather sky with sun (needs --dni, --dhi).
+    Perez,
+    /// Traditional CIE overcast sky normalised to --dhi.
+    CieOvercast,
+    /// CIE standard general sky --type 1..15 normalised to --dhi, sun from --dni.
+    Cie,
+    /// Preetham clear sky with sun (--turbidity).
+    Preetham,
+    /// No daylight.
+    None,
+}
+
+/// Subcommands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Illuminance at every sensor for one instant (direct sun + sky + ground glow).
+    Instant(InstantArgs),
+    /// Daylight factor at every sensor under the CIE overcast sky: df.csv, report.json.
+    Df(DfArgs),
+    /// Error against run time of every quality knob on one instant of the scene:
+    /// convergence.csv, convergence.svg, and a recommendation.
+    Convergence(ConvergenceArgs),
+    /// A time series over a weather file (EPW or WEA): illuminance.csv, direct_sun.csv,
+    /// metrics.csv, summary.json, report.json.
+    Annual(AnnualArgs),
+    /// Assembles the output folders of `annual --shard k/n` runs into one run's files.
+    Merge(MergeArgs),
+    /// Inspect or maintain a projection cache folder.
+    Cache {
+        /// What to do with the cache.
+        #[command(subcommand)]
+        action: CacheAction,
+    },
+}
+
+/// Arguments of `daystep instant`.
+#[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub struct InstantArgs {
+    /// The scene file (scene.toml).
+    pub scene: PathBuf,
+    /// Local standard time of the site, YYYY-MM-DDTHH:MM[:SS], or RFC 3339.
+    // The help text is the doc comment, so its brackets stay unescaped for rustdoc.
+    #[allow(rustdoc::broken_intra_doc_links)]
+    #[arg(long)]
+    pub time: String,
+    /// Sky model.
+    #[arg(long, value_enum)]
+    pub sky: SkyArg,
+    /// The sky's parameters.
+    #[command(flatten)]
+    pub params: SkyParams,
+    /// Output folder.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Quality, cache and seed.
+    #[command(flatten)]
+    pub run: RunArgs,
+}
+
+/// The parameters of `--sky` (`instant`, `convergence`); which ones a sky needs is
+/// checked by [`super::config::sky_spec`].
+#[derive(Args, Debug)]
+pub struct SkyParams {
+    /// Direct-normal irradiance, W/m².
+    #[arg(long)]
+    pub dni: Option<f64>,
+    /// Diffuse-horizontal irradiance, W/m².
+    #[arg(long)]
+    pub dhi: Option<f64>,
+    /// CIE general sky type, 1..15.
+    #[arg(long = "type")]
+    pub sky_type: Option<u8>,
+    /// Preetham turbidity (2..10).
+    #[arg(long)]
+    pub turbidity: Option<f64>,
+    /// Dew point for the Perez luminous efficacy, °C.
+    #[arg(long)]
+    pub dew_point: Option<f64>,
+}
+
+/// Arguments of `daystep merge`.
+#[derive(Args, Debug)]
+pub struct MergeArgs {
+    /// Shard output folders, any order.
+    #[arg(required = true)]
+    pub parts: Vec<PathBuf>,
+    /// Output folder.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Timestep of the runs, minutes (the weather file's interval).
+    #[arg(long, default_value_t = 60)]
+    pub step: u32,
+    /// Metric thresholds.
+    #[command(flatten)]
+    pub metrics: MetricArgs,
+}
+
+/// Arguments of `daystep df`.
+#[derive(Args, Debug)]
+pub struct DfArgs {
+    /// The scene file (scene.toml); it must name a sensors file.
+    pub scene: PathBuf,
+    /// Output folder (df.csv, report.json).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Quality, cache and seed.
+    #[command(flatten)]
+    pub run: RunArgs,
+}
+
+/// The quality, cache and seed flags of one instant (`instant`, `df`).
+#[derive(Args, Debug)]
+pub struct RunArgs {
+    /// Quality preset: draft, default, high, reference.
+    #[arg(long, default_value = "default")]
+    pub quality: String,
+    /// Projection cache folder (created if missing; a folder that cannot be written is
+    /// used read-only or not at all, with a warning).
+    #[arg(long, default_value = "cache")]
+    pub cache: PathBuf,
+    /// Run without the projection cache.
+    #[arg(long)]
+    pub no_cache: bool,
+    /// Seed of the Monte Carlo interreflection (results are a pure function of it).
+    #[arg(long)]
+    pub seed: Option<u64>,
+}
+
+/// Arguments of `daystep convergence`.
+#[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
+// The sky flags are shared with `instant`; two keep the wording they have always had here.
+#[command(mut_arg("dni", |a| a.help("Direct-normal irradiance, W/m² (perez, cie)")))]
+#[command(mut_arg("turbidity", |a| a.help("Preetham turbidity")))]
+pub struct ConvergenceArgs {
+    /// The scene file (scene.toml); it must name a sensors file.
+    pub scene: PathBuf,
+    /// Output folder (convergence.csv, convergence.svg, report.json).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Local standard time, as for `instant` (with `--sky`), or a weather file's date.
+    #[arg(long)]
+    pub time: Option<String>,
+    /// Sky model, as for `instant`.
+    #[arg(long, value_enum)]
+    pub sky: Option<SkyArg>,
+    /// The sky's parameters.
+    #[command(flatten)]
+    pub params: SkyParams,
+    /// Instead of --time/--sky: the weather file's sunniest record (largest beam on the
+    /// horizontal) is the instant studied.
+    #[arg(long, conflicts_with_all = ["time", "sky"])]
+    pub weather: Option<PathBuf>,
+    /// The preset the ladders vary one knob of.
+    #[arg(long, default_value = "default")]
+    pub quality: String,
+    /// Only these knobs, comma-separated (default: all): sky subdivision, sun snapping, LDI
+    /// resolution, refinement thresholds, sensor visibility, interreflection lines,
+    /// iteration tolerance, presets.
+    #[arg(long)]
+    pub knobs: Option<String>,
+    /// Relative RMS error the recommendation aims at, percent.
+    #[arg(long, default_value_t = 2.0)]
+    pub target: f64,
+    /// Seed of the interreflection.
+    #[arg(long)]
+    pub seed: Option<u64>,
+}
+
+/// Arguments of `daystep annual`.
+#[derive(Args, Debug)]
+pub struct AnnualArgs {
+    /// The scene file (scene.toml).
+    pub scene: PathBuf,
+    /// Weather file: EnergyPlus EPW or Radiance/DAYSIM WEA.
+    #[arg(long)]
+    pub weather: PathBuf,
+    /// Output folder; a rerun with the same folder continues an interrupted run.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Quality preset: draft, default, high, reference.
+    #[arg(long, default_value = "default")]
+    pub quality: String,
+    /// Projection cache folder.
+    #[arg(long, default_value = "cache")]
+    pub cache: PathBuf,
+    /// Run without the projection cache.
+    #[arg(long)]
+    pub no_cache: bool,
+    /// Compute shard k of n (every n-th day); `daystep merge` assembles the shards.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
+    /// First day, YYYY-MM-DD (month and day are matched against the weather file's dates).
+    #[arg(long)]
+    pub start: Option<String>,
+    /// Last day, YYYY-MM-DD.
+    #[arg(long)]
+    pub end: Option<String>,
+    /// Timestep, minutes: the weather file's interval (default), or a divisor of it, whose
+    /// steps interpolate the file's irradiances linearly in time (the report says so).
+    #[arg(long)]
+    pub step: Option<u32>,
+    /// Also write a Radiance/DAYSIM-style illuminance.ill.
+    #[arg(long)]
+    pub ill: bool,
+    /// Also write surfaces.csv: per OBJ group and step, mean incident irradiance (W/m²)
+    /// and, for glazing, transmitted solar power (W).
+    #[arg(long)]
+    pub surfaces: bool,
+    /// Seed of the Monte Carlo parts (results are a pure function of it).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Metric thresholds.
+    #[command(flatten)]
+    pub metrics: MetricArgs,
+}
+
+/// Annual-metric thresholds (honeybee-radiance-postprocess defaults).
+#[derive(Args, Debug)]
+pub struct MetricArgs {
+    /// First occupied hour (hour starting at), local standard time.
+    #[arg(long, default_value_t = 8)]
+    pub occupancy_start: u32,
+    /// Last occupied hour (inclusive; 17 = the hour 17:00–18:00).
+    #[arg(long, default_value_t = 17)]
+    pub occupancy_end: u32,
+    /// Daylight autonomy threshold, lux (DA counts ≥).
+    #[arg(long, default_value_t = 300.0)]
+    pub da_threshold: f64,
+    /// UDI lower bound, lux.
+    #[arg(long, default_value_t = 100.0)]
+    pub udi_min: f64,
+    /// UDI upper bound, lux.
+    #[arg(long, default_value_t = 3000.0)]
+    pub udi_max: f64,
+    /// sDA: fraction of occupied hours a sensor's DA must reach.
+    #[arg(long, default_value_t = 0.5)]
+    pub sda_fraction: f64,
+    /// ASE: direct-sun threshold, lux (counts >).
+    #[arg(long, default_value_t = 1000.0)]
+    pub ase_threshold: f64,
+    /// ASE: hours above the threshold that make a sensor fail (≥).
+    #[arg(long, default_value_t = 250.0)]
+    pub ase_hours: f64,
+}
+
+/// The cache folder argument of `daystep cache …`.
+#[derive(Args, Debug)]
+pub struct CacheDir {
+    /// Cache folder.
+    #[arg(long = "cache", default_value = "cache")]
+    pub dir: PathBuf,
+}
+
+/// `daystep cache` subcommands.
+#[derive(Subcommand, Debug)]
+pub enum CacheAction {
+    /// Number, size and age of the records.
+    Stats {
+        /// The folder.
+        #[command(flatten)]
+        cache: CacheDir,
+    },
+    /// Validate every record; exit 1 if any is invalid, unless --fix removes them.
+    Verify {
+        /// The folder.
+        #[command(flatten)]
+        cache: CacheDir,
+        /// Remove invalid records (they are rebuilt when next needed).
+        #[arg(long)]
+        fix: bool,
+    },
+    /// Remove all records and temporary files (keeps .gitignore, README.md, other files).
+    Clear {
+        /// The folder.
+        #[command(flatten)]
+        cache: CacheDir,
+    },
+}

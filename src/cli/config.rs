@@ -1,0 +1,211 @@
+//! Raw arguments ([`super::args`]) turned into library values: a quality preset, a sky, a
+//! projection cache, metric thresholds, dates, a shard, a set of knobs. Every refusal is an
+//! [`Error::Input`] naming the flag and the value, so it exits 1 with a message a user can
+//! act on.
+
+use super::args::{MetricArgs, SkyArg, SkyParams};
+use crate::cache::Store;
+use crate::error::{Error, Result};
+use crate::metrics::MetricParams;
+use crate::sequence::convergence::Ladder;
+use crate::sequence::{Quality, SkySpec};
+use chrono::NaiveDate;
+use std::path::Path;
+
+/// The preset `name` (`--quality`), with every random stream from `seed` when given.
+///
+/// # Errors
+/// [`Error::Input`] on `--quality` for an unknown preset.
+pub fn quality(name: &str, seed: Option<u64>) -> Result<Quality> {
+    let q = Quality::preset(name).ok_or_else(|| {
+        Error::arg(
+            "--quality",
+            name,
+            "expected draft, default, high or reference",
+        )
+    })?;
+    Ok(match seed {
+        Some(s) => q.with_seed(s),
+        None => q,
+    })
+}
+
+/// The value of flag `name`, which `--sky {sky}` needs.
+fn need(name: &str, v: Option<f64>, sky: &str) -> Result<f64> {
+    v.ok_or_else(|| Error::arg(name, "(missing)", format!("--sky {sky} needs {name}")))
+}
+
+/// The sky of `--sky` with its parameters: irradiances `--dni`, `--dhi` in W/m², CIE
+/// `--type` 1–15, Preetham `--turbidity`, `--dew-point` in °C. Values are checked by the
+/// sky models when the sky is built; here only their presence.
+///
+/// # Errors
+/// [`Error::Input`] naming the flag the chosen sky needs and lacks.
+pub fn sky_spec(sky: SkyArg, p: &SkyParams) -> Result<SkySpec> {
+    Ok(match sky {
+        SkyArg::Perez => SkySpec::Perez {
+            dni: need("--dni", p.dni, "perez")?,
+            dhi: need("--dhi", p.dhi, "perez")?,
+            dew_point_c: p.dew_point,
+        },
+        SkyArg::CieOvercast => SkySpec::CieOvercast {
+            dhi: need("--dhi", p.dhi, "cie-overcast")?,
+        },
+        SkyArg::Cie => SkySpec::Cie {
+            sky_type: p
+                .sky_type
+                .ok_or_else(|| Error::arg("--type", "(missing)", "--sky cie needs --type 1..15"))?,
+            dhi: need("--dhi", p.dhi, "cie")?,
+            dni: p.dni.unwrap_or(0.0),
+        },
+        SkyArg::Preetham => SkySpec::Preetham {
+            turbidity: need("--turbidity", p.turbidity, "preetham")?,
+        },
+        SkyArg::None => SkySpec::None,
+    })
+}
+
+/// The projection cache of a run: `dir` (`--cache`) at the default size limit, or none
+/// with `--no-cache`.
+pub fn store(dir: &Path, no_cache: bool) -> Store {
+    if no_cache {
+        Store::disabled()
+    } else {
+        Store::open(dir, crate::cache::DEFAULT_MAX_BYTES)
+    }
+}
+
+/// The annual-metric thresholds of the `--occupancy-*`, `--da-threshold`, `--udi-*`,
+/// `--sda-fraction` and `--ase-*` flags (hours, lux, fractions as the flags say); their
+/// consistency is checked by [`MetricParams::validate`].
+pub fn metric_params(m: &MetricArgs) -> MetricParams {
+    MetricParams {
+        occupancy_start_hour: m.occupancy_start,
+        occupancy_end_hour: m.occupancy_end,
+        da_threshold_lux: m.da_threshold,
+        udi_min_lux: m.udi_min,
+        udi_max_lux: m.udi_max,
+        sda_da_fraction: m.sda_fraction,
+        ase_threshold_lux: m.ase_threshold,
+        ase_hours: m.ase_hours,
+    }
+}
+
+/// `--shard K/N` as (k, n) with 1 ≤ k ≤ n; (1, 1) when absent.
+///
+/// # Errors
+/// [`Error::Input`] on `--shard` for anything else.
+pub fn shard(v: Option<&str>) -> Result<(u32, u32)> {
+    let Some(v) = v else { return Ok((1, 1)) };
+    let bad = || Error::arg("--shard", v, "expected K/N with 1 <= K <= N");
+    let (k, n) = v.split_once('/').ok_or_else(bad)?;
+    let (k, n): (u32, u32) = (k.parse().map_err(|_| bad())?, n.parse().map_err(|_| bad())?);
+    if k == 0 || n == 0 || k > n {
+        return Err(bad());
+    }
+    Ok((k, n))
+}
+
+/// The date `v` of flag `flag`, `YYYY-MM-DD`.
+///
+/// # Errors
+/// [`Error::Input`] naming the flag and the value when it is not such a date.
+pub fn date(flag: &str, v: &str) -> Result<NaiveDate> {
+    NaiveDate::parse_from_str(v, "%Y-%m-%d")
+        .map_err(|_| Error::arg(flag, v, "expected a date YYYY-MM-DD"))
+}
+
+/// `--target`, percent, as a fraction (2 → 0.02).
+///
+/// # Errors
+/// [`Error::Input`] on `--target` outside (0, 100).
+pub fn target(percent: f64) -> Result<f64> {
+    if !(percent > 0.0 && percent < 100.0) {
+        return Err(Error::arg("--target", percent, "a percentage in (0, 100)"));
+    }
+    Ok(percent / 100.0)
+}
+
+/// The ladders named in `--knobs` (comma-separated, spaces around names ignored), in
+/// `ladders`' order; all of them when the flag is absent.
+///
+/// # Errors
+/// [`Error::Input`] on `--knobs` naming the first unknown knob and the known ones.
+pub fn knobs(mut ladders: Vec<Ladder>, list: Option<&str>) -> Result<Vec<Ladder>> {
+    if let Some(list) = list {
+        let want: Vec<&str> = list.split(',').map(str::trim).collect();
+        let known: Vec<&str> = ladders.iter().map(|l| l.knob).collect();
+        if let Some(bad) = want.iter().find(|w| !known.contains(w)) {
+            return Err(Error::arg(
+                "--knobs",
+                bad,
+                format!("unknown knob; choose from: {}", known.join(", ")),
+            ));
+        }
+        ladders.retain(|l| want.contains(&l.knob));
+    }
+    Ok(ladders)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shard_accepts_k_of_n_only() {
+        assert_eq!(shard(None).unwrap(), (1, 1));
+        assert_eq!(shard(Some("2/3")).unwrap(), (2, 3));
+        for bad in ["0/3", "4/3", "3", "a/b", "1/0", "-1/2"] {
+            let (shown, path, _, value) = crate::error::input_parts(shard(Some(bad)).unwrap_err());
+            assert_eq!(path, Path::new("<argument --shard>"), "{shown}");
+            assert_eq!(value.as_deref(), Some(bad));
+        }
+    }
+
+    #[test]
+    fn errors_name_the_flag_and_value() {
+        let (_, path, _, value) = crate::error::input_parts(quality("fast", None).unwrap_err());
+        assert_eq!(
+            (path, value.as_deref()),
+            ("<argument --quality>".into(), Some("fast"))
+        );
+        let only_dni = SkyParams {
+            dni: Some(800.0),
+            dhi: None,
+            sky_type: None,
+            turbidity: None,
+            dew_point: None,
+        };
+        let e = sky_spec(SkyArg::Perez, &only_dni).unwrap_err();
+        let (shown, path, _, _) = crate::error::input_parts(e);
+        assert_eq!(path, Path::new("<argument --dhi>"));
+        assert!(shown.contains("--sky perez needs --dhi"), "{shown}");
+        let (_, path, _, value) = crate::error::input_parts(date("--end", "May 1").unwrap_err());
+        assert_eq!(
+            (path, value.as_deref()),
+            ("<argument --end>".into(), Some("May 1"))
+        );
+        for bad in [0.0, 100.0, f64::NAN] {
+            assert!(target(bad).is_err());
+        }
+        assert_eq!(target(50.0).unwrap(), 0.5);
+    }
+
+    #[test]
+    fn knobs_keep_the_named_ladders_in_order() {
+        let all = crate::sequence::convergence::ladders(&quality("draft", None).unwrap());
+        let names: Vec<&str> = all.iter().map(|l| l.knob).collect();
+        assert!(names.len() >= 2, "{names:?}");
+        let list = format!("{} , {}", names[1], names[0]);
+        let kept = knobs(all, Some(&list)).unwrap();
+        let kept: Vec<&str> = kept.iter().map(|l| l.knob).collect();
+        assert_eq!(kept, [names[0], names[1]]);
+        let all = crate::sequence::convergence::ladders(&quality("draft", None).unwrap());
+        let Err(e) = knobs(all, Some("colour")) else {
+            panic!("an unknown knob is refused")
+        };
+        let (shown, _, _, value) = crate::error::input_parts(e);
+        assert_eq!(value.as_deref(), Some("colour"));
+        assert!(shown.contains(names[0]), "{shown}");
+    }
+}
