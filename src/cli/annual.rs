@@ -52,9 +52,6 @@ pub fn run(a: AnnualArgs) -> Result<()> {
     if let Some(step) = a.step {
         weather = crate::weather::resample(&weather, step)?;
     }
-    if let Some(w) = weather.site_mismatch_warning(&scene.site) {
-        weather.warnings.push(w);
-    }
     let day = |flag: &str, v: &Option<String>| -> Result<_> {
         v.as_deref()
             .map(|v| config::date(flag, v).map(|d| weather.same_day_in_file_year(d)))

@@ -18,7 +18,6 @@
 
 use super::config::{Quality, SkySpec};
 use super::report::StageTimes;
-use super::sky::local_to_utc;
 use super::step::{Engine, EngineOptions, StepTime};
 use crate::cache::Store;
 use crate::error::{Error, Result};
@@ -188,6 +187,9 @@ pub fn run_annual(
         warnings: weather.warnings.clone(),
         ..AnnualReport::default()
     };
+    report
+        .warnings
+        .extend(weather.site_mismatch_warning(&scene.site));
     // Plan: records in the date range, grouped by day; this shard's days.
     let mut days: Vec<Vec<Planned>> = Vec::new();
     let mut day_index = 0usize;
@@ -496,7 +498,7 @@ fn classify(scene: &Scene, s: &Planned) -> Kind {
     if s.record.missing {
         return Kind::Missing;
     }
-    let sun = solar_position(local_to_utc(s.time, scene.site.utc_offset_h), &scene.site);
+    let sun = solar_position(s.record.utc(&scene.site), &scene.site);
     if s.record.dhi <= 0.0 && (s.record.dni <= 0.0 || sun.altitude_deg() <= 0.0) {
         return Kind::Night;
     }
@@ -538,7 +540,7 @@ impl Ctx<'_> {
         }
         let r = s.record;
         let at = StepTime {
-            utc: local_to_utc(s.time, self.scene.site.utc_offset_h),
+            utc: r.utc(&self.scene.site),
             local: s.time,
         };
         let spec = SkySpec::Perez {

@@ -6,13 +6,6 @@ use crate::error::Result;
 use crate::site::solar_position::SolarPosition;
 use crate::sky::{self, Sky};
 use crate::sources::{self, Source};
-use chrono::{DateTime, NaiveDateTime, Utc};
-
-/// Local standard time of `site`'s `local` clock reading as UTC (`utc_offset_h` hours east
-/// of Greenwich; no daylight-saving time), to the second.
-pub fn local_to_utc(local: NaiveDateTime, utc_offset_h: f64) -> DateTime<Utc> {
-    (local - chrono::TimeDelta::seconds((utc_offset_h * 3600.0) as i64)).and_utc()
-}
 
 /// Builds the sky of `spec` for the sun at `sun` on day `day_of_year` (1–366), with a
 /// ground of reflectance `ground`.

@@ -38,6 +38,16 @@ pub fn direction_from_alt_az(altitude_deg: f64, azimuth_deg: f64) -> DVec3 {
     DVec3::new(alt.cos() * az.sin(), alt.cos() * az.cos(), alt.sin())
 }
 
+/// The instant in UTC of the local standard time `local` of a site `utc_offset_h` hours east
+/// of Greenwich (no daylight-saving time), the offset truncated to whole seconds: the
+/// instant a weather record's sun is evaluated at.
+pub fn local_to_utc(
+    local: chrono::NaiveDateTime,
+    utc_offset_h: f64,
+) -> chrono::DateTime<chrono::Utc> {
+    (local - chrono::TimeDelta::seconds((utc_offset_h * 3600.0) as i64)).and_utc()
+}
+
 /// Parses an instant: local standard time of the site `YYYY-MM-DDTHH:MM[:SS]` (the site's
 /// UTC offset applies; no daylight-saving time), or RFC 3339 with an explicit offset.
 /// Returns the instant in UTC and the local standard date-time.

@@ -24,7 +24,7 @@ pub use resample::resample;
 
 use crate::error::{Error, Result};
 use crate::site::Site;
-use chrono::{DateTime, Datelike, NaiveDate, NaiveDateTime, TimeDelta, Utc};
+use chrono::{DateTime, Datelike, NaiveDate, NaiveDateTime, Utc};
 use std::path::{Path, PathBuf};
 
 /// Non-leap calendar year in which `time` is built for files without 29 February, so a
@@ -114,9 +114,7 @@ impl Weather {
     /// A warning when the file's site is more than 0.1° (latitude or longitude) from
     /// `site`, the one a run uses; `None` when they agree.
     ///
-    /// `sequence::annual::run_annual` reports [`Weather::warnings`]; a caller that
-    /// runs a scene on this weather pushes the warning there first, as `daystep annual`
-    /// does, so the run's report and terminal output carry it.
+    /// `sequence::annual::run_annual` adds it to its report's warnings.
     pub fn site_mismatch_warning(&self, site: &Site) -> Option<String> {
         let ws = &self.site;
         ((ws.latitude - site.latitude).abs() > 0.1 || (ws.longitude - site.longitude).abs() > 0.1)
@@ -145,7 +143,7 @@ impl WeatherRecord {
     /// The instant of [`WeatherRecord::time`] in UTC at `site` (its standard-time offset,
     /// truncated to whole seconds), the instant an annual run evaluates the sun at.
     pub fn utc(&self, site: &Site) -> DateTime<Utc> {
-        (self.time - TimeDelta::seconds((site.utc_offset_h * 3600.0) as i64)).and_utc()
+        crate::site::local_to_utc(self.time, site.utc_offset_h)
     }
 }
 
