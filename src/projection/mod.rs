@@ -35,7 +35,7 @@ pub struct ProjectionParams {
     /// lit hundredth of its area evenly over all of it: harmless to the sensors (ray cast),
     /// but the interreflection mesh took that light far from where it lands (measured on the
     /// office: 300–700 lx of sun at the back of the floor that gets none, −7 to −10 % in the
-    /// sun patch, README design notes). At the interreflection mesh's element size the paper's
+    /// sun patch, docs/design.md). At the interreflection mesh's element size the paper's
     /// thresholds take over again.
     pub partial_area_m2: f64,
     /// Deepest refinement below an input triangle.
@@ -48,7 +48,7 @@ impl Default for ProjectionParams {
             max_resolution: 1024,
             min_resolution: 64,
             // The paper's 0.05 / 0.95 left the office's sun patch 4.4 % RMS from converged
-            // (`daystep convergence`, README presets); 0.02 / 0.98 brings it to 0.45 % at
+            // (`daystep convergence`, docs/commands.md, quality presets); 0.02 / 0.98 brings it to 0.45 % at
             // no measurable extra time.
             v_min: 0.02,
             v_max: 0.98,
@@ -64,7 +64,7 @@ impl ProjectionParams {
     /// at half of it (at least `min_resolution`). The paper sizes each LDI by the source's
     /// share of the irradiance (§5.1); a fixed size per kind instead makes a direction's
     /// projection the same under every sky, so a year of skies projects each node once
-    /// and the cache can keep it (README design notes). Sensor values do not depend on it
+    /// and the cache can keep it (docs/design.md). Sensor values do not depend on it
     /// (they are ray cast); the element weights that feed interreflection do, slightly.
     pub fn resolution_for(&self, is_sun: bool) -> u32 {
         if is_sun {

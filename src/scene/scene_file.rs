@@ -1,5 +1,5 @@
 //! `scene.toml` (serde): geometry and sensor paths, up axis, north rotation, ground
-//! reflectance and site (see INTERFACE.md, "Scene file").
+//! reflectance and site (docs/commands.md, "Inputs").
 //!
 //! Unknown keys are not errors but warnings, so files written for a newer daystep still load.
 //! Values are read as [`toml::Spanned`] so that range errors name their line.
@@ -50,7 +50,7 @@ struct SiteToml {
     elevation_m: Option<Spanned<f64>>,
 }
 
-/// Loads a scene file and everything it references (see INTERFACE.md).
+/// Loads a scene file and everything it references (docs/commands.md, "Inputs").
 ///
 /// Paths in the file are relative to the scene file's folder. Warnings (unknown keys, a
 /// missing `[site]`, unknown MTL keys, …) end up in [`Scene::warnings`], each once.

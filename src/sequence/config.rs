@@ -7,7 +7,7 @@ use crate::sensors::SensorParams;
 use crate::sources::SkyParams;
 use serde::{Deserialize, Serialize};
 
-/// Which sky to build for an instant (INTERFACE.md `--sky`).
+/// Which sky to build for an instant (`--sky`, docs/commands.md).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "model", rename_all = "kebab-case")]
 pub enum SkySpec {
@@ -82,7 +82,7 @@ impl Quality {
             sun_spacing_deg: 0.25,
             projection: ProjectionParams::default(),
             sensors: SensorParams::default(),
-            // Measured on the office against path tracing (README): 1 024 directions at
+            // Measured on the office against path tracing (docs/design.md): 1 024 directions at
             // 256 px: 1.6 % RMS indirect error in 0.9 s.
             transport: TransportParams {
                 directions: 1024,

@@ -216,7 +216,7 @@ mod tests {
     use crate::site::direction_from_alt_az;
     use std::f64::consts::PI;
 
-    /// E_h/L_z (sr) by an independent midpoint rule in (Z, azimuth) as validation_cases.md
+    /// E_h/L_z (sr) by an independent midpoint rule in (Z, azimuth) as docs/derivations.md
     /// describes, using only `relative_luminance`.
     fn eh_over_lz(kind: CieSkyType, sun_zenith: f64) -> f64 {
         let (nz, na) = (300, 600);
@@ -233,7 +233,7 @@ mod tests {
         sum
     }
 
-    /// validation_cases.md §2.1: E_h/L_z for sun altitudes 15°, 30°, 45°, 60°.
+    /// docs/derivations.md, "CIE standard general skies": E_h/L_z for sun altitudes 15°, 30°, 45°, 60°.
     #[allow(clippy::approx_constant)] // 3.1416 = π·L_z is a tabulated value
     const TABLE: [[f64; 4]; 15] = [
         [2.4496, 2.4496, 2.4496, 2.4496],

@@ -380,7 +380,7 @@ mod tests {
         e0: f64,
     }
 
-    /// sky_and_sun.md §b regression anchors (computed there from the published formulas).
+    /// docs/derivations.md, "Perez all-weather sky and efficacy": anchors computed from the published formulas.
     const ANCHORS: [Anchor; 4] = [
         Anchor {
             dni: 700.0,

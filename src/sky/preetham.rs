@@ -259,7 +259,7 @@ mod tests {
     use crate::photometry::lux;
     use crate::site::direction_from_alt_az;
 
-    /// sky_and_sun.md §a: (T, θ_s°, Y_z kcd/m², x_z, y_z).
+    /// docs/derivations.md, "Preetham clear sky": (T, θ_s°, Y_z kcd/m², x_z, y_z).
     const ZENITH: [(f64, f64, f64, f64, f64); 16] = [
         (2.0, 0.0, 15.5007, 0.2667, 0.2772),
         (2.0, 30.0, 5.8867, 0.2514, 0.2559),
@@ -289,7 +289,7 @@ mod tests {
         }
     }
 
-    /// sky_and_sun.md §a: Y/Y_z at θ_s = 30° for (θ, γ) = (85°, 115°), (60°, 30°), (45°, 75°).
+    /// docs/derivations.md, "Preetham clear sky": Y/Y_z at θ_s = 30° for (θ, γ) = (85°, 115°), (60°, 30°), (45°, 75°).
     #[test]
     fn relative_luminance_table() {
         let cases = [

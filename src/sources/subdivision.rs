@@ -27,7 +27,7 @@ pub struct SkyParams {
     /// Also split while the spread of a node's radiance samples times its solid angle,
     /// (L_max − L_min)·ω, exceeds this fraction of the whole sky's ∫L dω: steep gradients
     /// near the horizon and around the sun make L̂ a poor average otherwise, and the
-    /// product bounds the node's share of that error. Not in the paper; see the README.
+    /// product bounds the node's share of that error. Not in the paper; see docs/design.md.
     pub max_variation: f64,
     /// Sources below this fraction of the whole sky's ∫L dω are left out (and counted).
     pub negligible_fraction: f64,
@@ -85,7 +85,7 @@ fn node_radiance(sky: &Sky, key: SkyNodeKey, v: &[DVec3; 3]) -> (Rgb, f64, [Rgb;
         }
     };
     // Centres of the four children: a 4-point centroid rule (same cost as the paper's
-    // vertices + centre, smaller error on curved radiance; see the README's notes).
+    // vertices + centre, smaller error on curved radiance; see docs/design.md).
     let kids = spherical_triangle::split(v[0], v[1], v[2]);
     let l = kids.map(|k| sky.radiance(lift(spherical_triangle::centre(k[0], k[1], k[2]))));
     let w = kids.map(|k| spherical_triangle::solid_angle(k[0], k[1], k[2]));
