@@ -159,10 +159,14 @@ pub fn f_parallel(a: f64, b: f64, h: f64) -> f64 {
     (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * std::f64::consts::PI)
 }
 
-/// Runs the daystep binary with `args`.
+/// Runs the daystep binary with `args`, in a fresh temporary working directory (removed
+/// afterwards): whatever the binary writes relative to it (the default `cache/` folder, a
+/// relative `--out`) stays out of the project. Paths in `args` must be absolute.
 pub fn daystep(args: &[&str]) -> std::process::Output {
+    let cwd = tempfile::tempdir().expect("temporary folder");
     std::process::Command::new(env!("CARGO_BIN_EXE_daystep"))
         .args(args)
+        .current_dir(cwd.path())
         .output()
         .expect("the binary runs")
 }
