@@ -14,5 +14,5 @@ mod layers; // the layer rule of lib.rs: lower layers never import higher ones
 mod parsers; // every parser under arbitrary and mutated input: no panic, hang or unbounded allocation
 mod physics; // closed-form daylight: unobstructed skies, roof opening, sun footprint, glazing
 mod radiosity; // HMC interreflection: furnace, configuration factor, Sumpner room, energy, threads
-mod transport; // global-line transport: furnace, configuration factor, closed room, warm = cold, threads
+mod transport; // global-line transport: furnace, configuration factor, closed rooms (exact enclosure), strata, warm = cold, threads
 mod warm_day; // 96 warm-started 15-minute steps of a clear day against cold solves
