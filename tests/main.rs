@@ -12,7 +12,7 @@ mod extremes; // low sun, polar day and night, turbidity limits, slivers, far co
 mod generated_scenes; // the generated office and building: areas, normals, closure, triangle target, bundled files
 mod layers; // the layer rule of lib.rs: lower layers never import higher ones
 mod parsers; // every parser under arbitrary and mutated input: no panic, hang or unbounded allocation
-mod physics; // closed-form daylight: unobstructed skies, roof opening, sun footprint, glazing
+mod physics; // closed-form daylight: unobstructed skies, roof opening, thin sky band, sun footprint, glazing
 mod radiosity; // HMC interreflection: furnace, configuration factor, Sumpner room, energy, threads
 mod transport; // global-line transport: furnace, configuration factor, closed rooms (exact enclosure), strata, warm = cold, threads
 mod warm_day; // 96 warm-started 15-minute steps of a clear day against cold solves
