@@ -45,7 +45,7 @@ pub mod math; // frames, spherical triangles, rasteriser, BVH, counter-based RNG
 pub mod photometry; // RGB ↔ lux at 179 lm/W
 
 // L1 inputs
-pub mod scene; // scene.toml, OBJ/MTL, .pts, a scene builder
+pub mod scene; // scene.toml, OBJ/MTL, .pts, a builder for scenes in code
 pub mod site; // site, solar position
 pub mod weather; // EPW and WEA weather files: site + DNI/DHI records at sun-evaluation times
 

@@ -2,6 +2,7 @@
 //! never trusted, read-only folders, LRU eviction, threads and processes sharing one
 //! folder, and the `daystep cache` commands.
 
+use crate::util::daystep;
 use daystep::cache::{
     self, decode_direction, encode_direction, RecordKey, SceneHash, Section, Store,
     DEFAULT_MAX_BYTES, FIRST_USER_TAG, KIND_SKY_NODE,
@@ -295,13 +296,6 @@ fn threads_and_processes_share_one_folder() {
     assert_eq!(report.ok as u64, SHARED_KEYS);
     assert_eq!(report.temp_files, 0);
     assert!(report.foreign.is_empty(), "{:?}", report.foreign);
-}
-
-fn daystep(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_daystep"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
 }
 
 #[test]

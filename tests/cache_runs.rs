@@ -1,6 +1,6 @@
 //! The projection cache in whole runs: warm = cold bit for bit; reflectance, site and
-//! weather changes reuse every record and equal a cold run of the changed scene; moving a
-//! vertex misses; damaged records are rebuilt with the result unchanged; four processes
+//! weather changes reuse every record the cache holds for them (all of them when the
+//! directions stay) and equal an uncached run of the changed inputs; moving a vertex misses; damaged records are rebuilt with the result unchanged; four processes
 //! fill one empty folder together.
 
 use daystep::cache::{self, Store};
@@ -8,6 +8,8 @@ use daystep::scene::Scene;
 use daystep::sequence::instant::{run_instant_cached, write_instant};
 use daystep::sequence::{Quality, SkySpec};
 use daystep::site::parse_time;
+use std::collections::BTreeSet;
+use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -51,8 +53,51 @@ fn run(scene: &Path, spec: &SkySpec, store: &Store) -> (String, cache::CacheStat
     )
 }
 
+/// The record files in a cache folder.
+fn records(dir: &Path) -> BTreeSet<OsString> {
+    std::fs::read_dir(dir)
+        .map(|rd| {
+            rd.map(|e| e.unwrap().file_name())
+                .filter(|n| Path::new(n).extension().is_some_and(|x| x == "dsr"))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// Runs changed inputs against the shared cache in `cache_dir` and checks the two things a
+/// cached run promises: its output equals an uncached run of the same inputs bit for bit,
+/// and it reuses everything the cache holds for it: each record these inputs need (what a
+/// cold run into the empty folder `fresh` writes) that earlier runs stored is a hit,
+/// directions and the interreflection operator alike, and only the others miss. Returns
+/// the output and the misses.
+fn changed_run(
+    scene: &Path,
+    spec: &SkySpec,
+    store: &Store,
+    cache_dir: &Path,
+    fresh: &Path,
+) -> (String, u64) {
+    let held = records(cache_dir);
+    let (out, s) = run(scene, spec, store);
+    let (uncached, _) = run(scene, spec, &Store::disabled());
+    assert_eq!(out, uncached, "a cached run equals an uncached one");
+    let (cold, _) = run(scene, spec, &Store::open(fresh, cache::DEFAULT_MAX_BYTES));
+    assert_eq!(cold, uncached);
+    let needed = records(fresh);
+    assert!(!needed.is_empty());
+    let reusable = needed.intersection(&held).count() as u64;
+    let new = needed.len() as u64 - reusable;
+    assert_eq!(s.rebuilds, 0, "{s:?}");
+    assert_eq!(
+        (s.hits, s.misses),
+        (reusable, new),
+        "(hits, misses) against the records the cache held for these inputs: {s:?}"
+    );
+    (out, s.misses)
+}
+
 #[test]
-fn warm_equals_cold_and_colour_site_weather_changes_all_hit() {
+fn warm_equals_cold_and_colour_site_weather_changes_reuse_every_record() {
     let d = tempfile::tempdir().unwrap();
     let (sd, cd) = (d.path().join("scene"), d.path().join("cache"));
     std::fs::create_dir(&sd).unwrap();
@@ -62,57 +107,80 @@ fn warm_equals_cold_and_colour_site_weather_changes_all_hit() {
     assert!(s1.misses > 0 && s1.hits == 0, "{s1:?}");
     let (warm, s2) = run(&scene, &sky(700.0), &store);
     assert_eq!(s2.misses, 0, "{s2:?}");
-    assert!(s2.hits > 0);
+    assert_eq!(s2.hits, s1.misses);
     assert_eq!(cold, warm, "a warm cache changes nothing");
     let (nocache, _) = run(&scene, &sky(700.0), &Store::disabled());
     assert_eq!(cold, nocache);
-
-    // Wall colour: all hits, and equal to a cold run of the recoloured scene.
-    let kd = |f: &str, t: String| {
-        if f == "office.mtl" {
-            t.replace("newmtl wall\nKd 0.5 0.5 0.5", "newmtl wall\nKd 0.7 0.6 0.5")
-        } else {
-            t
-        }
+    let mut k = 0;
+    let mut fresh = || {
+        k += 1;
+        d.path().join(format!("fresh{k}"))
     };
-    let sd2 = d.path().join("recoloured");
-    std::fs::create_dir(&sd2).unwrap();
-    let scene2 = office_copy(&sd2, kd);
-    let (recoloured, s3) = run(&scene2, &sky(700.0), &store);
-    assert_eq!(s3.misses, 0, "Kd is not in the key: {s3:?}");
-    assert_ne!(recoloured, cold);
-    assert_eq!(recoloured, run(&scene2, &sky(700.0), &Store::disabled()).0);
+    let copy = |name: &str, file: &'static str, from: &'static str, to: &'static str| {
+        let dir = d.path().join(name);
+        std::fs::create_dir(&dir).unwrap();
+        office_copy(&dir, |f, t| {
+            if f == file {
+                assert!(t.contains(from), "{f} has no {from:?}");
+                t.replace(from, to)
+            } else {
+                t
+            }
+        })
+    };
 
-    // Another weather (same instant): all hits where the directions recur.
-    let (_, s4) = run(&scene, &sky(300.0), &store);
-    assert_eq!(s4.rebuilds, 0);
-    assert!(s4.hits > 0, "{s4:?}");
+    // Changes that leave every direction as it was: none may miss. Kd, the site and the
+    // weather are not in any key; each change still changes the result.
+    let recoloured = copy(
+        "recoloured",
+        "office.mtl",
+        "newmtl wall\nKd 0.5 0.5 0.5",
+        "newmtl wall\nKd 0.7 0.6 0.5",
+    );
+    // 15° east and one time zone later: the same solar time, so the sun moves only by an
+    // hour's change of declination (0.02°) and stays on its grid point.
+    let moved_east = copy(
+        "moved_east",
+        "scene.toml",
+        "longitude = -79.95\nutc_offset_h = -5.0",
+        "longitude = -64.95\nutc_offset_h = -4.0",
+    );
+    let dew = SkySpec::Perez {
+        dni: 700.0,
+        dhi: 110.0,
+        dew_point_c: Some(15.0), // the luminous efficacy changes, not the sky's shape
+    };
+    for (what, scene, spec) in [
+        ("wall colour", &recoloured, sky(700.0)),
+        ("site", &moved_east, sky(700.0)),
+        ("dew point", &scene, dew),
+    ] {
+        let (out, misses) = changed_run(scene, &spec, &store, &cd, &fresh());
+        assert_eq!(misses, 0, "{what}: every record is reused");
+        assert_ne!(out, cold, "{what} changes the result");
+    }
 
-    // Another site: the sun moves (new sun key) but every sky node is a hit.
-    let sd3 = d.path().join("moved_site");
-    std::fs::create_dir(&sd3).unwrap();
-    let scene3 = office_copy(&sd3, |f, t| {
-        if f == "scene.toml" {
-            t.replace("latitude = 36.1", "latitude = 40.0")
-        } else {
-            t
-        }
-    });
-    let (moved, s5) = run(&scene3, &sky(700.0), &store);
-    assert!(s5.hits > 0);
-    assert_eq!(moved, run(&scene3, &sky(700.0), &Store::disabled()).0);
+    // Changes that need some new directions: the dimmer sky subdivides differently, and at
+    // 40° N the sun is on another grid point. Everything else is reused.
+    let moved_north = copy(
+        "moved_north",
+        "scene.toml",
+        "latitude = 36.1",
+        "latitude = 40.0",
+    );
+    for (what, scene, spec) in [
+        ("DNI 300 W/m²", &scene, sky(300.0)),
+        ("latitude 40°", &moved_north, sky(700.0)),
+    ] {
+        let (out, misses) = changed_run(scene, &spec, &store, &cd, &fresh());
+        eprintln!("{what}: {misses} of {} records new", s1.misses);
+        assert!(misses < s1.misses / 4, "{what}: {misses} misses");
+        assert_ne!(out, cold, "{what} changes the result");
+    }
 
     // Moving one vertex: a new geometry, every lookup misses.
-    let sd4 = d.path().join("moved_vertex");
-    std::fs::create_dir(&sd4).unwrap();
-    let scene4 = office_copy(&sd4, |f, t| {
-        if f == "office.obj" {
-            t.replacen("v 0 8 3\n", "v 0 8 3.01\n", 1)
-        } else {
-            t
-        }
-    });
-    let (_, s6) = run(&scene4, &sky(700.0), &store);
+    let moved_vertex = copy("moved_vertex", "office.obj", "v 0 8 3\n", "v 0 8 3.01\n");
+    let (_, s6) = run(&moved_vertex, &sky(700.0), &store);
     assert_eq!(s6.hits, 0, "{s6:?}");
     assert!(s6.misses > 0);
 }

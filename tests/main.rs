@@ -1,5 +1,6 @@
 //! daystep's one integration-test binary (one binary links faster on 2-core CI).
 
+mod scenes; // the generated office and building, shared with the benches
 mod util; // scene builders in code, closed-form helpers, assert helpers
 
 mod annual; // annual runs: resume after Ctrl-C and a cut line, shards merged, a day vs cold instants
@@ -8,8 +9,9 @@ mod cache_runs; // the cache in whole runs: warm = cold, Kd/site/weather hit, ve
 mod cli; // the binary end to end: exit codes, messages naming file:line, outputs
 mod df; // daylight factor: 100 % in the open, the vertical formula, roof-opening sky component, CLI
 mod extremes; // low sun, polar day and night, turbidity limits, slivers, far coordinates
+mod generated_scenes; // the generated office and building: areas, normals, closure, triangle target, bundled files
 mod layers; // the layer rule of lib.rs: lower layers never import higher ones
 mod parsers; // every parser under arbitrary and mutated input: no panic, hang or unbounded allocation
-mod physics; // closed-form daylight: unobstructed skies, roof opening, sun footprint, glazing
-mod transport; // global-line transport: furnace, configuration factor, closed room, warm = cold, threads
+mod physics; // closed-form daylight: unobstructed skies, roof opening, thin sky band, sun footprint, glazing
+mod transport; // global-line transport: furnace, configuration factor, closed rooms (exact enclosure), strata, warm = cold, threads
 mod warm_day; // 96 warm-started 15-minute steps of a clear day against cold solves

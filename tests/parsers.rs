@@ -749,7 +749,7 @@ fn scene_with_huge_coordinates() {
 /// origin is finite and the triangle kept, and what still overflows is an error naming the
 /// scene file and the value.
 #[test]
-fn scene_coordinates_near_f64_max() {
+fn coordinates_near_f64_max_give_a_finite_origin_or_an_error() {
     let f = Folder::office();
     let write = |vertices: &str, sensors: &str, north: f64| {
         let obj = format!("mtllib office.mtl\n{vertices}usemtl wall\nf 1 2 3\n");

@@ -474,3 +474,43 @@ fn leaf_value(
     }
     panic!("{p} is not on the floor");
 }
+
+/// Regression (c9c6915): a few samples of a wide sky node all missed a thin band of sky
+/// (between an obstruction and a window head), and the band's light was lost. A black
+/// closed room with a 0.1 m × 9 m slit 3 m above the floor sensors (1.9° wide, 112° long)
+/// under a uniform sky, which keeps the sky's nodes large: E = π L F(point → slit).
+#[test]
+fn a_thin_band_of_sky_is_not_missed() {
+    let (w, l) = (0.1, 10.0);
+    let (x0, x1, y0, y1) = (5.0 - w / 2.0, 5.0 + w / 2.0, 0.5, 9.5);
+    let mut b = Builder::new();
+    let black = b.material("black", 0.0, 0.0);
+    b.hrect(0.0, 10.0, 0.0, 10.0, 0.0, true, black);
+    b.hrect_with_hole((0.0, 10.0, 0.0, 10.0), (x0, x1, y0, y1), 3.0, false, black);
+    b.walls_inward(0.0, 10.0, 0.0, 10.0, 0.0, 3.0, black);
+    let points = [DVec3::new(5.0, 5.0, 0.0), DVec3::new(5.3, 3.0, 0.0)];
+    for p in points {
+        b.sensor(p, DVec3::Z);
+    }
+    let scene = b.build();
+    let r = run(
+        &scene,
+        &sky_of(Some(Box::new(Uniform(l))), None, 0.0),
+        &Quality::default(),
+    );
+    for (got, p) in r.sensors.iter().zip(points) {
+        // The slit by superposition of corner rectangles, signed by side.
+        let corner = |x: f64, y: f64| x.signum() * y.signum() * f_parallel(x.abs(), y.abs(), 3.0);
+        let (a0, a1, b0, b1) = (x0 - p.x, x1 - p.x, y0 - p.y, y1 - p.y);
+        let f = corner(a1, b1) - corner(a0, b1) - corner(a1, b0) + corner(a0, b0);
+        let expected = lux_of(PI * l * f);
+        assert_close(
+            &format!("slit above {p}"),
+            got.lux,
+            expected,
+            0.02 * expected,
+        );
+        let err = (got.lux - expected).abs();
+        assert!(got.lux_err >= err, "lux_err {} vs error {err}", got.lux_err);
+    }
+}

@@ -4,12 +4,15 @@
 //! warm. Prints only; `-- --office-only` skips the building.
 
 use daystep::cache::{Store, DEFAULT_MAX_BYTES};
-use daystep::scene::{synthetic, Scene};
+use daystep::scene::Scene;
 use daystep::sequence::annual::{run_annual, AnnualOptions, AnnualReport, RunControl};
 use daystep::sequence::Quality;
 use daystep::weather::read_weather;
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
+
+#[path = "../scenes/mod.rs"]
+mod scenes;
 
 fn run(
     scene: &Scene,
@@ -71,7 +74,7 @@ fn main() {
     if std::env::args().any(|a| a == "--office-only") {
         return;
     }
-    let building = synthetic::multi_storey_building(10_000);
+    let building = scenes::multi_storey_building(10_000);
     let cache = tmp.path().join("cache_b");
     let week = Some(("2021-06-15", "2021-06-21"));
     let cold = run(&building, &epw, week, &cache, &tmp.path().join("b1"));

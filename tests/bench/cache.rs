@@ -6,7 +6,7 @@
 //! sample office instead.
 
 use daystep::cache::{dir_stats, Store, DEFAULT_MAX_BYTES};
-use daystep::scene::{synthetic, Scene};
+use daystep::scene::Scene;
 use daystep::sequence::annual::{run_annual, AnnualOptions, AnnualReport, RunControl};
 use daystep::sequence::instant::run_instant_cached;
 use daystep::sequence::{Quality, SkySpec};
@@ -15,6 +15,9 @@ use daystep::weather::{read_weather, resample};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
+
+#[path = "../scenes/mod.rs"]
+mod scenes;
 
 fn status_mb(key: &str) -> f64 {
     std::fs::read_to_string("/proc/self/status")
@@ -81,7 +84,7 @@ fn main() {
     let scene = if std::env::args().any(|a| a == "--office") {
         Scene::load(&root.join("scenes/office/scene.toml")).unwrap()
     } else {
-        synthetic::multi_storey_building(10_000)
+        scenes::multi_storey_building(10_000)
     };
     println!(
         "scene: {} triangles, {} sensors, default quality",

@@ -6,10 +6,12 @@
 //! `target/convergence-building.svg`). Prints figures; asserts nothing.
 
 use daystep::export::plot::error_vs_time_svg;
-use daystep::scene::synthetic;
 use daystep::sequence::convergence::{csv, curves, ladders, recommendation, run_convergence};
 use daystep::sequence::{Quality, SkySpec};
 use daystep::site::parse_time;
+
+#[path = "../scenes/mod.rs"]
+mod scenes;
 
 fn main() {
     let args: Vec<String> = std::env::args()
@@ -33,7 +35,7 @@ fn main() {
         .get(1)
         .cloned()
         .unwrap_or_else(|| "target/convergence-building.svg".into());
-    let scene = synthetic::multi_storey_building(10_000);
+    let scene = scenes::multi_storey_building(10_000);
     let (utc, local) = parse_time("2021-06-21T15:00", scene.site.utc_offset_h).unwrap();
     let spec = SkySpec::Perez {
         dni: 750.0,

@@ -3,12 +3,15 @@
 //! the `reference` preset, on the sample office and a generated 10 000-triangle building.
 //! It prints figures; nothing here asserts a time.
 
-use daystep::scene::{synthetic, Scene};
+use daystep::scene::Scene;
 use daystep::sequence::{run_instant, InstantResult, Quality, SkySpec};
 use daystep::site::parse_time;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
+
+#[path = "../scenes/mod.rs"]
+mod scenes;
 
 fn peak_rss_mb() -> f64 {
     std::fs::read_to_string("/proc/self/status")
@@ -143,7 +146,7 @@ fn main() {
         Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office/scene.toml"))
             .unwrap();
     bench_scene("sample office", &office, 5);
-    let building = synthetic::multi_storey_building(10_000);
+    let building = scenes::multi_storey_building(10_000);
     bench_scene("generated building", &building, 3);
     println!("\npeak RSS of the whole benchmark: {:.0} MB", peak_rss_mb());
 }

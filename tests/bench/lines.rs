@@ -7,12 +7,15 @@
 
 use daystep::photometry::{lux, Rgb};
 use daystep::radiosity::{Tracer, Transport, TransportParams};
-use daystep::scene::{synthetic, Scene};
+use daystep::scene::Scene;
 use daystep::sequence::instant::{build_sky, run_sky};
 use daystep::sequence::{Quality, SkySpec};
 use daystep::site::{parse_time, solar_position::solar_position};
 use std::path::Path;
 use std::time::Instant;
+
+#[path = "../scenes/mod.rs"]
+mod scenes;
 
 fn direct(scene: &Scene, time: &str) -> (daystep::hierarchy::Hierarchy, Vec<Rgb>) {
     let (utc, local) = parse_time(time, scene.site.utc_offset_h).unwrap();
@@ -208,7 +211,7 @@ fn main() {
     // The default operator of the building (element size bounded by `max_rows`).
     bench(
         "multi-storey building 10k",
-        &synthetic::multi_storey_building(10_000),
+        &scenes::multi_storey_building(10_000),
         80,
         50_000,
     );
