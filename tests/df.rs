@@ -101,7 +101,7 @@ fn open_ground_plane_reads_100_percent_up_and_the_vertical_formula_sideways() {
 fn roof_opening_gives_the_overcast_sky_component() {
     // Black closed 10 × 10 × 3 m box, 1 × 1 m hole centred 3 m above the floor sensor: no
     // interreflection, no ground glow, so DF = sky component. Moon–Spencer: E/L_z =
-    // 0.1065100 (validation_cases.md §2.5, as in physics::sky_component_under_roof_opening),
+    // 0.1065100 (docs/derivations.md, "Overcast sky through the roof opening"; as in physics::sky_component_under_roof_opening),
     // and E_outside/L_z = 7π/9, so DF = 100 × 0.1065100 / (7π/9) ≈ 4.359 %.
     let scene = crate::physics::roof_opening_room(1.0, None);
     let r = run_df(&scene, &draft(), &Store::disabled()).unwrap();

@@ -1,4 +1,4 @@
-//! Closed-form daylight cases (validation_cases.md §2): every expected value here comes
+//! Closed-form daylight cases (docs/derivations.md): every expected value here comes
 //! from a formula or a published table, never from daystep's own earlier output.
 
 use crate::util::*;
@@ -96,7 +96,7 @@ fn cie_relative(t: usize, z: f64, az: f64, zs: f64, azs: f64) -> f64 {
     f(chi) * phi(z) / (f(zs) * phi(0.0))
 }
 
-/// Published E_h/L_z (validation_cases.md §2.1) at sun altitudes 15, 30, 45, 60°.
+/// Published E_h/L_z (docs/derivations.md, "CIE standard general skies") at sun altitudes 15, 30, 45, 60°.
 /// (Type 5 is the published 3.1416, i.e. π to the table's precision.)
 #[allow(clippy::approx_constant)]
 const EH_OVER_LZ: [[f64; 4]; 15] = [
@@ -238,7 +238,7 @@ fn sky_component_under_roof_opening() {
         Box::new(Uniform(10.0)),
         lux_of(PI * 10.0 * f),
     );
-    // Moon–Spencer overcast: E/L_z = 0.1065100 (validation_cases.md §2.5).
+    // Moon–Spencer overcast: E/L_z = 0.1065100 (docs/derivations.md, "Overcast sky through the roof opening").
     check(
         "overcast through 1x1 m opening",
         Box::new(MoonSpencer(10.0)),
@@ -356,7 +356,7 @@ fn sun_through_roof_opening_lights_its_footprint_and_refines_its_edge() {
 
 #[test]
 fn glazing_transmittance_follows_the_glass_formula() {
-    // Published Radiance-glass transmittance for T_n = 0.88 (validation_cases.md §2.6).
+    // Published Radiance-glass transmittance for T_n = 0.88 (docs/derivations.md, "Glazing transmittance").
     let table = [
         (0.0, 0.8800),
         (30.0, 0.8755),

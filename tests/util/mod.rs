@@ -161,7 +161,7 @@ pub fn assert_close(what: &str, actual: f64, expected: f64, tol: f64) {
 }
 
 /// Configuration factor of a parallel rectangle a × b at height h with one corner above
-/// the point (validation_cases.md §2.2).
+/// the point (docs/derivations.md, "Configuration factor: point to a parallel rectangle").
 pub fn f_parallel(a: f64, b: f64, h: f64) -> f64 {
     let (x, y) = (a / h, b / h);
     let sx = (1.0 + x * x).sqrt();
