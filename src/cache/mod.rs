@@ -23,12 +23,17 @@
 //! invalid is removed and rebuilt, with a warning. A cache that cannot be written degrades
 //! to a disabled one with a warning: the cache can make a run faster, never make it fail.
 //!
-//! Modules: [`key`] (scene hash, record key, file name), [`record`] (file format, codec of
-//! direction records), [`store`] (the folder: get, put, eviction, maintenance).
+//! Modules: [`key`] (scene hash, record key, file name), [`record`] (file format),
+//! [`direction_codec`] (direction records as record sections), [`store`] (the folder: get,
+//! put, counters), `eviction` (keeping the folder under its size limit) and
+//! [`maintenance`] (stats, verify, clear).
 
 pub mod key;
 pub mod record;
+pub mod direction_codec;
 pub mod store;
+mod eviction;
+pub mod maintenance;
 
 pub use key::{
     scene_hash, RecordKey, SceneHash, KIND_GROUND, KIND_SKY_NODE, KIND_SUN, KIND_TRANSPORT,

@@ -4,6 +4,7 @@
 
 pub mod material;
 pub mod obj;
+mod mtl;
 pub mod scene_file;
 pub mod sensors;
 pub mod synthetic;

@@ -1,6 +1,7 @@
 //! L1 where and when: the site, and the sun's position for an instant.
 
 pub mod solar_position;
+mod spa_tables;
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};

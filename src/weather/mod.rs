@@ -17,6 +17,7 @@
 //! the leap year of its 29 February records when it has one (see [`epw`] and [`wea`]).
 
 pub mod epw;
+mod epw_header;
 pub mod resample;
 pub mod wea;
 
