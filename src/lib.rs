@@ -21,7 +21,7 @@
 //!
 //! Layers (a module uses only lower layers; `tests/layers.rs` checks it):
 //! L0 error, files, math, photometry · L1 site, scene, weather (scene and weather may use
-//! site) · L2 sky, sources · L3 hierarchy · L4 projection · L5 transfer, cache ·
+//! site) · L2 sky, sources · L3 hierarchy · L4 projection · L5 transfer, cache, trace ·
 //! L6 sensors, radiosity · L7 metrics, export (export may use metrics) · L8 sequence · L9 cli.
 #![warn(missing_docs)]
 #![deny(unsafe_code)] // the one exception: cache::store::map_readonly
@@ -45,10 +45,11 @@ pub mod sources; // sky subdivision into parallel sources; snapped sun
 pub mod cache; // direction-keyed, memory-mapped store of projection records
 pub mod hierarchy; // element quadtree keys and arena
 pub mod projection; // LDI per source, visibility ratio, refinement
+pub mod trace; // one BVH per geometry: rays through glazing, the glazing mirror
 pub mod transfer; // direct transfer to elements
 
 // L6 results
-pub mod radiosity; // hierarchical Monte Carlo radiosity: interreflection after the direct shoot
+pub mod radiosity; // global-line interreflection operator, its solve and sensor responses
 pub mod sensors; // sensor illuminance from every source, with error estimate
 
 // L7 results over time

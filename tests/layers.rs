@@ -11,7 +11,7 @@ fn layer_of(module: &str) -> Option<u32> {
         "sky" | "sources" => 2,
         "hierarchy" => 3,
         "projection" => 4,
-        "transfer" | "cache" => 5,
+        "transfer" | "cache" | "trace" => 5,
         "sensors" | "radiosity" => 6,
         "metrics" | "export" | "render" => 7,
         "sequence" => 8,

@@ -232,7 +232,8 @@ pub fn run_annual(
     let (mut w_sun, done_sun) = IlluminanceWriter::resume(&out.join("direct_sun.csv"), sensors)?;
     // The interreflection operator (geometry only, cached) is needed before resuming when
     // surfaces are asked for: its mesh defines their columns.
-    let dirs = Directions::new(scene, quality, store);
+    let tracer = crate::trace::Tracer::new(scene);
+    let dirs = Directions::new(scene, quality, store, &tracer);
     let needs_radiosity = scene.triangles.iter().any(|t| {
         let m = &scene.materials[t.material as usize];
         m.reflectance().max_element() > 0.0 || m.is_emitter()
@@ -240,7 +241,7 @@ pub fn run_annual(
     let mut stage = Stages::default();
     let ts = Instant::now();
     let operator = if (needs_radiosity && !scene.sensors.is_empty()) || opts.surfaces {
-        let (t, cached) = super::operator::transport(scene, &quality.transport, store);
+        let (t, cached) = super::operator::transport(scene, &quality.transport, store, &tracer);
         report.operator_from_cache = cached;
         Some(t)
     } else {

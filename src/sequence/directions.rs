@@ -10,8 +10,9 @@ use crate::cache::{self, MappedRecord, RecordKey, SceneHash, Section, Store, FIR
 use crate::photometry::Rgb;
 use crate::projection::{self, DirectionRecord, ProjectionScene};
 use crate::scene::Scene;
-use crate::sensors::{node_response, sun_response, NodeResponse, Visibility};
+use crate::sensors::{node_response, sun_response, NodeResponse};
 use crate::sources::{Source, SourceKey};
+use crate::trace::Tracer;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -50,7 +51,7 @@ pub struct DirectionCounts {
 pub struct Directions<'a> {
     scene: &'a Scene,
     pscene: ProjectionScene,
-    vis: Visibility<'a>,
+    vis: &'a Tracer,
     store: &'a Store,
     hash: SceneHash,
     quality: Quality,
@@ -62,8 +63,14 @@ pub struct Directions<'a> {
 
 impl<'a> Directions<'a> {
     /// Prepares lookups for `scene` at `quality` through `store` (use
-    /// [`Store::disabled`] for no disk cache).
-    pub fn new(scene: &'a Scene, quality: &Quality, store: &'a Store) -> Directions<'a> {
+    /// [`Store::disabled`] for no disk cache), casting rays with `tracer` (the run's one
+    /// BVH over `scene`).
+    pub fn new(
+        scene: &'a Scene,
+        quality: &Quality,
+        store: &'a Store,
+        tracer: &'a Tracer,
+    ) -> Directions<'a> {
         let s = &quality.sensors;
         let mut extra = Vec::new();
         extra.extend_from_slice(&s.visibility_depth.to_le_bytes());
@@ -72,7 +79,7 @@ impl<'a> Directions<'a> {
         Directions {
             scene,
             pscene: ProjectionScene::new(scene),
-            vis: Visibility::new(scene),
+            vis: tracer,
             store,
             hash: cache::scene_hash(scene, &quality.projection, &extra),
             quality: *quality,
@@ -91,6 +98,11 @@ impl<'a> Directions<'a> {
     /// The scene.
     pub fn scene(&self) -> &Scene {
         self.scene
+    }
+
+    /// The run's ray caster over the scene.
+    pub fn tracer(&self) -> &'a Tracer {
+        self.vis
     }
 
     /// Transmission (RGB) from sensor `k` towards the sun `source`: the cached response,
@@ -193,14 +205,14 @@ impl<'a> Directions<'a> {
             .iter()
             .map(|s| match source.vertices {
                 Some(tri) => {
-                    let r = node_response(&self.vis, s, tri, &self.quality.sensors);
+                    let r = node_response(self.vis, s, tri, &self.quality.sensors);
                     rays += r.rays;
                     r
                 }
                 None => {
                     rays += 1;
                     let mut r = NodeResponse::default();
-                    let (t, glazed) = sun_response(&self.vis, s, source.direction);
+                    let (t, glazed) = sun_response(self.vis, s, source.direction);
                     r.child[0] = t;
                     r.child[1].x = if glazed { 1.0 } else { 0.0 };
                     r

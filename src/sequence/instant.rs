@@ -144,8 +144,9 @@ pub fn direct_light(
 /// a disk cache.
 pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report) -> InstantResult {
     let store = crate::cache::Store::disabled();
-    let dirs = Directions::new(scene, quality, &store);
-    let coarse = Directions::new(scene, &quality.coarser(), &store);
+    let tracer = crate::trace::Tracer::new(scene);
+    let dirs = Directions::new(scene, quality, &store, &tracer);
+    let coarse = Directions::new(scene, &quality.coarser(), &store, &tracer);
     run_sky_with(scene, sky, &dirs, &coarse, report)
 }
 
@@ -271,7 +272,7 @@ pub fn run_sky_with(
     let mut global = None;
     if needs_radiosity {
         let (t, cached) = times.time("transport_build", || {
-            super::operator::transport(scene, &quality.transport, dirs.store())
+            super::operator::transport(scene, &quality.transport, dirs.store(), dirs.tracer())
         });
         if cached {
             counts.operators_reused += 1;
@@ -439,8 +440,9 @@ pub fn run_instant_with_sky(
     }
     report.sky = sky.description.clone();
     report.stage_seconds = times;
-    let dirs = Directions::new(scene, quality, store);
-    let coarse = Directions::new(scene, &quality.coarser(), store);
+    let tracer = crate::trace::Tracer::new(scene);
+    let dirs = Directions::new(scene, quality, store, &tracer);
+    let coarse = Directions::new(scene, &quality.coarser(), store, &tracer);
     let mut result = run_sky_with(scene, &sky, &dirs, &coarse, &mut report);
     result.report.cache = Some(store.stats());
     result.report.warnings.extend(store.warnings());
