@@ -58,6 +58,7 @@ pub mod hierarchy; // element quadtree keys and arena
 pub mod projection; // LDI per source, visibility ratio, refinement
 pub mod transfer; // direct transfer to elements
 pub mod cache; // direction-keyed, memory-mapped store of projection records
+pub mod trace; // the one ray tracer: one BVH per geometry, glazing τ(θ) and mirror
 
 // L6 results
 pub mod radiosity; // global-line interreflection operator, its solve and gather

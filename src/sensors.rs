@@ -10,94 +10,20 @@
 //! direction ([`sun_response`]). Radiance is applied per child of each node (the sources
 //! carry their four children's radiance), one level finer than the sources' L̂, and the
 //! difference to L̂ is reported as an error estimate. Visibility is an exact ray cast
-//! (two-sided opaque occluders, glazing multiplies by τ(θ)). Direct light is
+//! through the run's shared [`Tracer`] (two-sided opaque occluders, glazing multiplies by
+//! τ(θ)). Direct light is
 //! transmission-only: glazing's specular reflection of sky and sun is not added here (the
-//! interreflection, [`crate::radiosity::transport`], includes it for light reflected by
+//! interreflection, [`crate::radiosity`], includes it for light reflected by
 //! surfaces).
 
-use crate::math::bvh::Bvh;
 use crate::math::spherical_triangle::{
     self, clip_to_hemisphere, projected_solid_angle_polygon, split,
 };
 use crate::photometry::{grey, Rgb};
-use crate::scene::{Scene, Sensor};
+use crate::scene::Sensor;
+use crate::trace::{Outcome, Tracer};
 use glam::DVec3;
 use std::collections::HashMap;
-
-/// Ray-casting view of a scene for visibility queries.
-pub struct Visibility<'a> {
-    scene: &'a Scene,
-    bvh: Bvh,
-    normals: Vec<DVec3>,
-}
-
-/// Offset (m) below which hits are ignored, so a sensor on a surface does not see itself.
-const T_MIN_M: f64 = 1e-6;
-
-impl<'a> Visibility<'a> {
-    /// Builds the ray-casting structure over the scene's triangles.
-    pub fn new(scene: &'a Scene) -> Self {
-        let tris: Vec<[DVec3; 3]> = scene.triangles.iter().map(|t| t.v).collect();
-        Visibility {
-            scene,
-            bvh: Bvh::build(&tris),
-            normals: scene.triangles.iter().map(|t| t.normal()).collect(),
-        }
-    }
-
-    /// Transmission (per channel) from `origin` to infinity along unit `dir`: glazing
-    /// multiplies by τ(θ), an opaque surface stops the light.
-    pub fn transmission(&self, origin: DVec3, dir: DVec3) -> Rgb {
-        self.trace(origin, dir, dir).0
-    }
-
-    /// As [`Self::transmission`], with the glazing's angle of incidence taken from
-    /// `incidence` instead of `dir` (the sun: visibility follows the snapped direction, the
-    /// glass sees the true one).
-    pub fn transmission_for(&self, origin: DVec3, dir: DVec3, incidence: DVec3) -> Rgb {
-        self.trace(origin, dir, incidence).0
-    }
-
-    /// Transmission, the opaque triangle that stopped the ray (if any), and whether any
-    /// glazing was crossed.
-    fn trace(&self, origin: DVec3, dir: DVec3, incidence: DVec3) -> (Rgb, Option<u32>, bool) {
-        let mut t = Rgb::ONE;
-        let mut stopper = None;
-        let mut glazing = false;
-        self.bvh
-            .hits_in_order(origin, dir, T_MIN_M, f64::INFINITY, |hit| {
-                let tri = &self.scene.triangles[hit.triangle as usize];
-                let m = &self.scene.materials[tri.material as usize];
-                if m.is_glazing() {
-                    glazing = true;
-                    t *= m.transmittance(self.normals[hit.triangle as usize].dot(incidence).abs());
-                    t.max_element() > 0.0
-                } else {
-                    t = Rgb::ZERO;
-                    stopper = Some(hit.triangle);
-                    false
-                }
-            });
-        (t, stopper, glazing)
-    }
-
-    /// True when no triangle can lie inside the pyramid from `apex` spanned by the unit
-    /// directions `poly` (a convex spherical polygon) above the plane through `apex` with
-    /// normal `n`: the whole pyramid is then provably unobstructed.
-    fn pyramid_is_empty(&self, apex: DVec3, n: DVec3, poly: &[DVec3]) -> bool {
-        let centre = poly.iter().fold(DVec3::ZERO, |a, &b| a + b);
-        let mut planes = Vec::with_capacity(poly.len() + 1);
-        for k in 0..poly.len() {
-            let mut e = poly[k].cross(poly[(k + 1) % poly.len()]);
-            if e.dot(centre) < 0.0 {
-                e = -e;
-            }
-            planes.push((e, e.dot(apex)));
-        }
-        planes.push((n, n.dot(apex) + T_MIN_M));
-        !self.bvh.any_in_region(&planes)
-    }
-}
 
 /// Knobs of the sensor gather.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -143,22 +69,22 @@ pub struct SensorDirect {
 }
 
 /// One sensor's ray casts, memoised by exact direction (neighbouring nodes share corners).
-struct Rays<'v, 'a> {
-    vis: &'v Visibility<'a>,
+struct Rays<'v> {
+    vis: &'v Tracer,
     p: DVec3,
     n: DVec3,
-    memo: HashMap<[u64; 3], (Rgb, Option<u32>, bool)>,
+    memo: HashMap<[u64; 3], Outcome>,
     cast: u64,
 }
 
-impl Rays<'_, '_> {
-    fn trace(&mut self, d: DVec3) -> (Rgb, Option<u32>, bool) {
+impl Rays<'_> {
+    fn trace(&mut self, d: DVec3) -> Outcome {
         let key = [d.x.to_bits(), d.y.to_bits(), d.z.to_bits()];
         if let Some(t) = self.memo.get(&key) {
             return *t;
         }
         self.cast += 1;
-        let t = self.vis.trace(self.p, d, d);
+        let t = self.vis.trace(self.p, d, Rgb::ONE);
         self.memo.insert(key, t);
         t
     }
@@ -175,27 +101,30 @@ impl Rays<'_, '_> {
             return None;
         }
         let centre = poly.iter().fold(DVec3::ZERO, |a, &b| a + b).normalize();
-        let traced: Vec<(Rgb, Option<u32>, bool)> = poly
+        let traced: Vec<Outcome> = poly
             .iter()
             .chain(std::iter::once(&centre))
             .map(|d| self.trace(*d))
             .collect();
-        let first = traced[0].0;
+        let first = traced[0].transmission();
         let uniform = traced
             .iter()
-            .all(|s| (s.0 - first).abs().max_element() < 1e-9);
-        let mean = traced.iter().fold(Rgb::ZERO, |a, s| a + s.0) / traced.len() as f64;
+            .all(|s| (s.transmission() - first).abs().max_element() < 1e-9);
+        let mean = traced.iter().fold(Rgb::ZERO, |a, s| a + s.transmission()) / traced.len() as f64;
         let (lo, hi) = traced
             .iter()
-            .map(|s| grey(s.0))
+            .map(|s| grey(s.transmission()))
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
                 (a.min(x), b.max(x))
             });
         // Proofs that the samples speak for the whole node: every sample stopped by the
         // same opaque triangle (convex, so it covers the node's whole pyramid behind it),
         // or every sample clear and no triangle inside the pyramid at all.
-        let same_stopper = traced[0].1.is_some() && traced.iter().all(|s| s.1 == traced[0].1);
-        let all_clear = traced.iter().all(|s| s.1.is_none() && !s.2);
+        let stopper = traced[0].end.stopper();
+        let same_stopper = stopper.is_some() && traced.iter().all(|s| s.end.stopper() == stopper);
+        let all_clear = traced
+            .iter()
+            .all(|s| s.end.stopper().is_none() && s.panes == 0);
         let proven = uniform
             && (same_stopper || (all_clear && self.vis.pyramid_is_empty(self.p, self.n, &poly)));
         Some(NodeSample {
@@ -234,8 +163,8 @@ fn clipped_psa(tri: &[DVec3; 3], n: DVec3) -> f64 {
 /// Geometry-only response of one sensor to one sky or ground node, for time series where
 /// the same node recurs under different skies: per child of the node (split order),
 /// ∫_child V(ω) τ(ω) max(0, n·ω) dω (RGB, sr); the sensor's irradiance from the node is
-/// Σ_c L_c ⊙ `child[c]` for child radiances L_c. Computed like [`sensor_direct`] but with a
-/// node-local, radiance-free stop rule, so it can be cached by node key.
+/// Σ_c L_c ⊙ `child[c]` for child radiances L_c. The stop rule is node-local and
+/// radiance-free, so the response can be cached by node key.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct NodeResponse {
     /// Visible projected solid angle per child, with glazing transmission (RGB, sr).
@@ -252,7 +181,7 @@ pub struct NodeResponse {
 /// projected solid angle above `visibility_tolerance` × the node's projected solid angle / 4,
 /// down to `visibility_depth`.
 pub fn node_response(
-    vis: &Visibility,
+    vis: &Tracer,
     sensor: &Sensor,
     tri: [DVec3; 3],
     params: &SensorParams,
@@ -303,20 +232,21 @@ pub fn node_response(
 
 /// Geometry-only response of one sensor to the sun along the snapped direction `dir`:
 /// the transmission (RGB) of the ray, and whether it crossed glazing (whose τ(θ) must then
-/// be re-evaluated at the true sun direction: [`Visibility::transmission_for`]). The
+/// be re-evaluated at the true sun direction: [`Tracer::transmission_for`]). The
 /// irradiance is E_n ⊙ transmission × max(0, n·true direction).
-pub fn sun_response(vis: &Visibility, sensor: &Sensor, dir: DVec3) -> (Rgb, bool) {
+pub fn sun_response(vis: &Tracer, sensor: &Sensor, dir: DVec3) -> (Rgb, bool) {
     if sensor.normal.dot(dir) <= -1e-3 {
         return (Rgb::ZERO, false);
     }
-    let (t, _, glazing) = vis.trace(sensor.position, dir, dir);
-    (t, glazing && t != Rgb::ZERO)
+    let out = vis.trace(sensor.position, dir, Rgb::ONE);
+    let t = out.transmission();
+    (t, out.panes > 0 && t != Rgb::ZERO)
 }
 
 #[cfg(test)]
 mod response_tests {
     use super::*;
-    use crate::scene::{Material, ModelInput, Triangle};
+    use crate::scene::{Material, ModelInput, Scene, Triangle};
     use crate::sources::SkyNodeKey;
 
     #[test]
@@ -343,7 +273,7 @@ mod response_tests {
             ..ModelInput::default()
         };
         let scene = Scene::from_model(std::path::Path::new("<t>"), input).unwrap();
-        let vis = Visibility::new(&scene);
+        let vis = Tracer::new(&scene);
         let p = SensorParams::default();
         let mut total = 0.0;
         for base in 0..4 {

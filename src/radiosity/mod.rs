@@ -1,23 +1,30 @@
 //! L6 diffuse interreflection by global lines (Besuievsky & Martín §6, with the paper's
-//! references [10] and [15]): a fixed operator over a mesh, estimated once per geometry
+//! references \[10\] and \[15\]): a fixed operator over a mesh, estimated once per geometry
 //! with bundles of parallel lines through the same LDI machinery as the direct light
 //! ([`transport`]), then solved deterministically for each timestep, warm-started from the
 //! previous one; the sensors read it through a sparse gather matrix, and daylight
-//! coefficients ([`response`]) turn it into per-direction sensor responses.
+//! coefficients ([`response`]) turn it into per-direction sensor responses. Rays go
+//! through the run's one [`crate::trace::Tracer`], shared with the direct sensors.
 //!
 //! A local-line hierarchical Monte Carlo solver (Bekaert et al. 1998) lived here until
 //! issue 12: it was biased by 30–45 % deep in rooms and was removed; its measured
 //! comparison is in `docs/design.md`.
 
-pub mod lines;
-pub mod response;
-pub mod transport;
+mod bundles; // the operator estimate: line bundles through LDIs, glazing mirror links
+mod coarse; // the operator one level coarser, for the discretisation estimate
+mod gather; // sensor gather matrix, and the sensors' reading of a solution
+pub mod mesh; // the fixed mesh: unknowns, point → row, area averages onto it
+pub mod response; // adjoint daylight coefficients
+mod solve; // Gauss–Seidel, stop rule, warm start
+mod sparse; // sparse RGB rows
+mod strata; // equal-area direction strata of the bundles
+pub mod transport; // the Transport type, its parameters and build
 
-pub use lines::Tracer;
+pub use gather::TransportSensor;
+pub use mesh::Mesh;
 pub use response::{DirectionResponse, SensorResponse};
-pub use transport::{
-    Transport, TransportParams, TransportReport, TransportSensor, TransportState, TransportStats,
-};
+pub use solve::{TransportReport, TransportState};
+pub use transport::{Transport, TransportParams, TransportStats};
 
 use crate::photometry::Rgb;
 

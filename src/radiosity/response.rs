@@ -1,8 +1,8 @@
 //! Sensor responses through the global-line operator, by its adjoint: for every mesh row r
-//! and sensor s, X[r][s] = ∂(indirect irradiance at s)/∂(unshot exitance S_r), the
+//! and sensor s, X\[r\]\[s\] = ∂(indirect irradiance at s)/∂(unshot exitance S_r), the
 //! solution of X_r = G_sr + Σ_k ρ_k F_kr X_k (the transpose of B = S + ρ ⊙ F B, read by
 //! the sensor gather G). With X, a sensor's indirect irradiance for any source is
-//! Σ_r X[r][s] ⊙ S_r: no per-timestep solve.
+//! Σ_r X\[r\]\[s\] ⊙ S_r: no per-timestep solve.
 //!
 //! Why: an annual run solves the same operator for thousands of source vectors but reads
 //! it at only a few hundred sensors. One adjoint solve per sensor (all sensors at once, as
@@ -15,7 +15,9 @@
 //! Memory is rows × sensors × 3 × 4 bytes per part and level, so [`Transport::response`]
 //! declines (returns `None`) above a byte budget and callers keep the forward solve.
 
-use super::transport::{Sparse, Transport, TransportSensor};
+use super::sparse::Sparse;
+use super::transport::Transport;
+use super::TransportSensor;
 use crate::photometry::Rgb;
 use rayon::prelude::*;
 use std::time::Instant;

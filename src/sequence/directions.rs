@@ -10,8 +10,9 @@ use crate::cache::{self, MappedRecord, RecordKey, SceneHash, Section, Store, FIR
 use crate::photometry::Rgb;
 use crate::projection::{self, DirectionRecord, ProjectionScene};
 use crate::scene::Scene;
-use crate::sensors::{node_response, sun_response, NodeResponse, Visibility};
+use crate::sensors::{node_response, sun_response, NodeResponse};
 use crate::sources::{Source, SourceKey};
+use crate::trace::Tracer;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -50,7 +51,7 @@ pub struct DirectionCounts {
 pub struct Directions<'a> {
     scene: &'a Scene,
     pscene: ProjectionScene,
-    vis: Visibility<'a>,
+    vis: Arc<Tracer>,
     store: &'a Store,
     hash: SceneHash,
     quality: Quality,
@@ -65,21 +66,33 @@ pub struct Directions<'a> {
 
 impl<'a> Directions<'a> {
     /// Prepares lookups for `scene` at `quality` through `store` (use
-    /// [`Store::disabled`] for no disk cache).
-    pub fn new(scene: &'a Scene, quality: &Quality, store: &'a Store) -> Directions<'a> {
-        Directions::with(scene, quality, store, true)
+    /// [`Store::disabled`] for no disk cache), casting rays with `tracer` (the run's one
+    /// BVH over `scene`).
+    pub fn new(
+        scene: &'a Scene,
+        quality: &Quality,
+        store: &'a Store,
+        tracer: Arc<Tracer>,
+    ) -> Directions<'a> {
+        Directions::with(scene, quality, store, tracer, true)
     }
 
     /// As [`Self::new`], computing and caching only the sensor responses (each record's
     /// projection is left empty): what the error estimate's coarser level needs.
-    pub fn sensors_only(scene: &'a Scene, quality: &Quality, store: &'a Store) -> Directions<'a> {
-        Directions::with(scene, quality, store, false)
+    pub fn sensors_only(
+        scene: &'a Scene,
+        quality: &Quality,
+        store: &'a Store,
+        tracer: Arc<Tracer>,
+    ) -> Directions<'a> {
+        Directions::with(scene, quality, store, tracer, false)
     }
 
     fn with(
         scene: &'a Scene,
         quality: &Quality,
         store: &'a Store,
+        tracer: Arc<Tracer>,
         project: bool,
     ) -> Directions<'a> {
         let s = &quality.sensors;
@@ -94,7 +107,7 @@ impl<'a> Directions<'a> {
         Directions {
             scene,
             pscene: ProjectionScene::new(scene),
-            vis: Visibility::new(scene),
+            vis: tracer,
             store,
             hash: cache::scene_hash(scene, &quality.projection, &extra),
             quality: *quality,
@@ -114,6 +127,11 @@ impl<'a> Directions<'a> {
     /// The scene.
     pub fn scene(&self) -> &Scene {
         self.scene
+    }
+
+    /// The run's ray caster over the scene.
+    pub fn tracer(&self) -> &Tracer {
+        &self.vis
     }
 
     /// Transmission (RGB) from sensor `k` towards the sun `source`: the cached response,

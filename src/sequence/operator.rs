@@ -8,6 +8,7 @@ use crate::projection::ProjectionParams;
 use crate::radiosity::transport::SparseArrays;
 use crate::radiosity::{Transport, TransportParams, TransportStats};
 use crate::scene::Scene;
+use crate::trace::Tracer;
 
 /// Section tags: stats, then per part p and matrix m three arrays (offsets, columns,
 /// values) at `TAG_PARTS + 16 p + 4 m + {0, 1, 2}`.
@@ -31,15 +32,21 @@ fn key(scene: &Scene, params: &TransportParams) -> RecordKey {
     }
 }
 
-/// The operator of `scene` for its sensors, and whether it came from the cache.
-pub fn transport(scene: &Scene, params: &TransportParams, store: &Store) -> (Transport, bool) {
+/// The operator of `scene` for its sensors, and whether it came from the cache; built
+/// through `tracer` (the run's ray caster over `scene`) when not.
+pub fn transport(
+    scene: &Scene,
+    params: &TransportParams,
+    store: &Store,
+    tracer: &Tracer,
+) -> (Transport, bool) {
     let k = key(scene, params);
     if let Some(r) = store.get(&k) {
         if let Some(t) = decode(scene, params, &r) {
             return (t, true);
         }
     }
-    let t = Transport::build(scene, &scene.sensors, params);
+    let t = Transport::build_with(scene, &scene.sensors, params, tracer);
     if store.is_enabled() {
         store.put(&k, &encode(&k, &t));
     }

@@ -34,6 +34,7 @@ use crate::scene::Scene;
 use crate::site::solar_position::solar_position;
 use crate::sky::Sky;
 use crate::sources::{Source, SourceKey};
+use crate::trace::Tracer;
 use crate::transfer::{self, DirectIrradiance};
 use chrono::{DateTime, Datelike, NaiveDateTime, Utc};
 use rayon::prelude::*;
@@ -117,11 +118,13 @@ impl<'a> Engine<'a> {
         opts: &EngineOptions,
     ) -> Engine<'a> {
         let mut setup = StageTimes::default();
+        // One BVH per run, shared by the sensor responses and the operator's lines.
+        let tracer = Arc::new(setup.time("tracer", || Tracer::new(scene)));
         // The surface output needs the operator's mesh (its columns) even in a black scene.
         let wanted = (needs_interreflection(scene) && !scene.sensors.is_empty()) || opts.surfaces;
         let (operator, operator_from_cache) = if wanted {
             let (t, cached) = setup.time("operator", || {
-                super::operator::transport(scene, &quality.transport, store)
+                super::operator::transport(scene, &quality.transport, store, &tracer)
             });
             (Some(t), cached)
         } else {
@@ -142,8 +145,8 @@ impl<'a> Engine<'a> {
         }
         Engine {
             scene,
-            dirs: Directions::new(scene, quality, store),
-            coarse: Directions::sensors_only(scene, &quality.coarser(), store),
+            dirs: Directions::new(scene, quality, store, tracer.clone()),
+            coarse: Directions::sensors_only(scene, &quality.coarser(), store, tracer),
             operator,
             operator_from_cache,
             setup,

@@ -6,11 +6,12 @@
 //! warm-started transport steps against cold ones. Prints only.
 
 use daystep::photometry::{lux, Rgb};
-use daystep::radiosity::{Tracer, Transport, TransportParams};
+use daystep::radiosity::{Transport, TransportParams};
 use daystep::scene::Scene;
 use daystep::sequence::instant::{build_sky, run_sky};
 use daystep::sequence::{Quality, SkySpec};
 use daystep::site::{parse_time, solar_position::solar_position};
+use daystep::trace::Tracer;
 use std::path::Path;
 use std::time::Instant;
 
@@ -49,7 +50,7 @@ fn path_traced(
     paths: u64,
 ) -> Vec<f64> {
     use daystep::math::rng::uniform;
-    use daystep::radiosity::lines::{barycentric, cosine_direction, End};
+    use daystep::trace::{barycentric, cosine_direction, End};
     use rayon::prelude::*;
     let leaf = |tri: u32, y: glam::DVec3| -> Rgb {
         let mut i = tri;
