@@ -20,37 +20,7 @@ pub struct ElementKey {
 /// Deepest subdivision representable by a path.
 pub const MAX_DEPTH: u32 = quadtree::MAX_DEPTH - 1;
 
-impl ElementKey {
-    /// The input triangle itself.
-    pub fn root(tri: u32) -> Self {
-        ElementKey {
-            tri,
-            path: quadtree::ROOT,
-        }
-    }
-    /// Subdivision depth (0 for an input triangle).
-    pub fn depth(&self) -> u32 {
-        quadtree::depth(self.path)
-    }
-    /// Child `k` (0..4).
-    pub fn child(&self, k: u8) -> Self {
-        ElementKey {
-            tri: self.tri,
-            path: quadtree::child(self.path, k),
-        }
-    }
-    /// Parent, or `None` at the root.
-    pub fn parent(&self) -> Option<Self> {
-        quadtree::parent(self.path).map(|path| ElementKey {
-            tri: self.tri,
-            path,
-        })
-    }
-    /// Vertices of the element (scene frame), from the root triangle's vertices.
-    pub fn vertices(&self, root: [DVec3; 3]) -> [DVec3; 3] {
-        quadtree::descend(root, self.path, |t| split(*t))
-    }
-}
+crate::quadtree_key!(ElementKey, tri: u32);
 
 /// 4-way midpoint split: corners at v0, v1, v2, then the middle triangle (same orientation).
 pub fn split(v: [DVec3; 3]) -> [[DVec3; 3]; 4] {

@@ -38,6 +38,42 @@ pub fn descend<T>(root: T, path: u64, split: impl Fn(&T) -> [T; 4]) -> T {
     t
 }
 
+/// The inherent quadtree methods (`root`, `depth`, `child`, `parent`) of a key type made
+/// of a root index field and a heap-encoded `path` field: written once for the element
+/// keys and the sky-node keys.
+#[macro_export]
+macro_rules! quadtree_key {
+    ($key:ident, $root:ident: $root_ty:ty) => {
+        impl $key {
+            /// The root (an input triangle, or a base face) `root` itself.
+            pub fn root($root: $root_ty) -> Self {
+                $key {
+                    $root,
+                    path: $crate::math::quadtree::ROOT,
+                }
+            }
+            /// Subdivision depth (0 for a root).
+            pub fn depth(&self) -> u32 {
+                $crate::math::quadtree::depth(self.path)
+            }
+            /// Child `k` (0..4), in the split order of the key's geometry.
+            pub fn child(&self, k: u8) -> Self {
+                $key {
+                    $root: self.$root,
+                    path: $crate::math::quadtree::child(self.path, k),
+                }
+            }
+            /// Parent, or `None` at the root.
+            pub fn parent(&self) -> Option<Self> {
+                $crate::math::quadtree::parent(self.path).map(|path| $key {
+                    $root: self.$root,
+                    path,
+                })
+            }
+        }
+    };
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -27,32 +27,9 @@ pub struct SkyNodeKey {
     pub path: u64,
 }
 
+crate::quadtree_key!(SkyNodeKey, base: u8);
+
 impl SkyNodeKey {
-    /// The base face `base`.
-    pub fn root(base: u8) -> Self {
-        SkyNodeKey {
-            base,
-            path: quadtree::ROOT,
-        }
-    }
-    /// Subdivision depth (0 for a base face).
-    pub fn depth(&self) -> u32 {
-        quadtree::depth(self.path)
-    }
-    /// Child `k` (0..4) in [`spherical_triangle::split`] order.
-    pub fn child(&self, k: u8) -> Self {
-        SkyNodeKey {
-            base: self.base,
-            path: quadtree::child(self.path, k),
-        }
-    }
-    /// The parent node, or `None` for a base face.
-    pub fn parent(&self) -> Option<Self> {
-        quadtree::parent(self.path).map(|path| SkyNodeKey {
-            base: self.base,
-            path,
-        })
-    }
     /// Unit vertices of the node's spherical triangle, recomputed from the base face so
     /// the same key always gives bit-identical directions.
     pub fn vertices(&self) -> [DVec3; 3] {
