@@ -22,6 +22,13 @@ pub const MAX_DEPTH: u32 = quadtree::MAX_DEPTH - 1;
 
 crate::quadtree_key!(ElementKey, tri: u32);
 
+impl ElementKey {
+    /// Vertices of the element (scene frame), from the root triangle's vertices.
+    pub fn vertices(&self, root: [DVec3; 3]) -> [DVec3; 3] {
+        quadtree::descend(root, self.path, |t| split(*t))
+    }
+}
+
 /// 4-way midpoint split: corners at v0, v1, v2, then the middle triangle (same orientation).
 pub fn split(v: [DVec3; 3]) -> [[DVec3; 3]; 4] {
     let m01 = (v[0] + v[1]) * 0.5;
