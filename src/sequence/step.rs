@@ -18,7 +18,7 @@
 
 use super::config::{Quality, SkySpec};
 use super::direct::{mesh_irradiance, sensors_from_responses, MeshMemo, MeshWeights};
-use super::directions::Directions;
+use super::directions::{DirectionData, Directions};
 use super::estimate::{SensorValue, ERROR_MODEL};
 use super::report::{Counts, Report, StageTimes, SunReport};
 use super::sky::{build_sky, sources_for};
@@ -78,6 +78,15 @@ pub struct Step {
     pub elements: Option<(Hierarchy, DirectIrradiance)>,
     /// The step's report: sun, counts, stage times, what was skipped, the solve.
     pub report: Report,
+}
+
+/// What stage 5 yields: the sensors' interreflected light, the solution for the next
+/// step's warm start (forward solves), and the surface output when asked.
+#[derive(Default)]
+struct Interreflected {
+    sensors: Vec<TransportSensor>,
+    state: Option<TransportState>,
+    surfaces: Vec<f64>,
 }
 
 /// Memo of per-direction daylight coefficients.
@@ -263,11 +272,153 @@ impl<'a> Engine<'a> {
         mut report: Report,
         dni_dhi: Option<(f64, f64)>,
     ) -> Step {
-        let scene = self.scene;
-        let quality = self.dirs.quality();
         let mut times = std::mem::take(&mut report.stage_seconds);
-        let s = times.time("sources", || sources_for(sky, quality));
+        // 2. Sources.
+        let s = times.time("sources", || sources_for(sky, self.dirs.quality()));
+        self.note_sources(&s, &mut report);
         let sources = s.sources;
+        // 3. Directions: projections and sensor responses, cached.
+        let data = times.time("directions", || self.dirs.get_all(&sources));
+        let records: Vec<&DirectionRecord> = data.iter().map(|d| &d.record).collect();
+        count_sources(&sources, &records, self.scene, &mut report.counts);
+        // 4. Direct transfer: the refined elements when asked; the mesh in stage 5.
+        let elements = detail.then(|| {
+            times.time("transfer", || {
+                let mut h = Hierarchy::new(self.scene);
+                let d = transfer::transfer(&mut h, &sources, &records);
+                report.counts.elements_after = h.leaf_count();
+                (h, d)
+            })
+        });
+        // 5. Interreflection.
+        let light = self.interreflect(&sources, &data, previous, dni_dhi, &mut times, &mut report);
+        // 6–7. Sensors and their stated error.
+        let sensors = self.sensor_values(
+            sky,
+            &sources,
+            &data,
+            &light.sensors,
+            &mut times,
+            &mut report,
+        );
+        report.warnings.extend(sky.warnings.iter().cloned());
+        let dc = self.dirs.counts();
+        report.counts.ldis_built = dc.built as usize;
+        report.counts.ldis_reused = (dc.from_cache + dc.reused) as usize;
+        report.stage_seconds = times;
+        Step {
+            sensors,
+            state: light.state,
+            surfaces: light.surfaces,
+            sky: None,
+            sources,
+            elements,
+            report,
+        }
+    }
+
+    /// Stage 5: the interreflected light at the sensors, by daylight coefficients or by a
+    /// solve warm-started from `previous` (with the surface output when asked).
+    fn interreflect(
+        &self,
+        sources: &[Source],
+        data: &[Arc<DirectionData>],
+        previous: Option<&TransportState>,
+        dni_dhi: Option<(f64, f64)>,
+        times: &mut StageTimes,
+        report: &mut Report,
+    ) -> Interreflected {
+        let scene = self.scene;
+        let mut out = Interreflected::default();
+        match (&self.operator, &self.response) {
+            (Some(op), Some(resp)) => {
+                out.sensors = times.time("interreflection", || {
+                    let mut acc = resp.start();
+                    for (src, d) in sources.iter().zip(data) {
+                        let dc = self.coefficients(op, resp, src, &d.record);
+                        resp.add(&mut acc, src.normal_irradiance, &dc);
+                    }
+                    resp.sensors_of(&acc)
+                });
+            }
+            (Some(op), None) => {
+                let weights = times.time("transfer_mesh", || self.mesh_weights(op, sources, data));
+                let e = mesh_irradiance(op.rows(), sources, &weights);
+                let (next, rep) = times.time("interreflection", || op.solve(&e, previous));
+                if let Some(m) = &self.surfaces {
+                    let mut et = vec![Rgb::ZERO; op.rows()];
+                    for (src, w) in sources.iter().zip(&weights) {
+                        m.add_transmitted(&mut et, src, w, scene);
+                    }
+                    let sin_alt = report.sun.altitude_deg.to_radians().sin();
+                    let k = dni_dhi.map_or(1.0, |(dni, dhi)| {
+                        SurfaceMap::solar_scale(sources, dni, dhi, sin_alt)
+                    });
+                    out.surfaces = m.values(op, Some(&next), &e, &et, k);
+                }
+                out.sensors = times.time("indirect_gather", || op.sensors(&next));
+                report.transport = Some(op.stats);
+                report.transport_solve = Some(rep);
+                out.state = Some(next);
+            }
+            (None, _) => {
+                report.skipped.push(if needs_interreflection(scene) {
+                    "interreflection: no sensors and no surface output need it".into()
+                } else {
+                    "interreflection: every surface is black and nothing emits".into()
+                });
+                out.sensors = vec![TransportSensor::default(); scene.sensors.len()];
+            }
+        }
+        out
+    }
+
+    /// Stages 6–7: each sensor's direct light from its responses, the same one level
+    /// coarser, the interreflected light `indirect`, and the stated error.
+    fn sensor_values(
+        &self,
+        sky: &Sky,
+        sources: &[Source],
+        data: &[Arc<DirectionData>],
+        indirect: &[TransportSensor],
+        times: &mut StageTimes,
+        report: &mut Report,
+    ) -> Vec<SensorValue> {
+        report.error_model = ERROR_MODEL.into();
+        if self.scene.sensors.is_empty() {
+            report
+                .skipped
+                .push("sensor gather: the scene has no sensors".into());
+            return Vec::new();
+        }
+        let fine = times.time("sensors", || {
+            sensors_from_responses(&self.dirs, sources, data)
+        });
+        let coarse = times.time("error_estimate", || {
+            let cs = sources_for(sky, self.coarse.quality()).sources;
+            let cdata = self.coarse.get_all(&cs);
+            sensors_from_responses(&self.coarse, &cs, &cdata)
+        });
+        let values: Vec<SensorValue> = fine
+            .iter()
+            .zip(&coarse)
+            .zip(indirect)
+            .map(|((f, c), i)| {
+                report.counts.sensor_rays += f.rays + c.rays;
+                SensorValue::estimate(f, c, i)
+            })
+            .collect();
+        report.max_lux_err = values.iter().map(|v| v.lux_err).fold(0.0, f64::max);
+        report.max_relative_err = values
+            .iter()
+            .filter_map(|v| v.relative_error(1.0))
+            .fold(0.0, f64::max);
+        values
+    }
+
+    /// The report's source counts, sun snapping and what the scene lets the step skip.
+    fn note_sources(&self, s: &super::sky::SkySources, report: &mut Report) {
+        let scene = self.scene;
         report.counts = Counts {
             negligible_sources: s.negligible,
             elements_before: scene.triangles.len(),
@@ -281,109 +432,7 @@ impl<'a> Engine<'a> {
             report.sun.snapping_error_deg = e;
             report.sun.max_shadow_shift_m = scene_diagonal(scene) * e.to_radians();
         }
-        self.note_skipped(&sources, &mut report);
-
-        let data = times.time("directions", || self.dirs.get_all(&sources));
-        let records: Vec<&DirectionRecord> = data.iter().map(|d| &d.record).collect();
-        count_sources(&sources, &records, scene, &mut report.counts);
-        let elements = detail.then(|| {
-            times.time("transfer", || {
-                let mut h = Hierarchy::new(scene);
-                let d = transfer::transfer(&mut h, &sources, &records);
-                report.counts.elements_after = h.leaf_count();
-                (h, d)
-            })
-        });
-
-        // Interreflection.
-        let mut state = None;
-        let mut surfaces = Vec::new();
-        let indirect: Vec<TransportSensor> = match (&self.operator, &self.response) {
-            (Some(op), Some(resp)) => times.time("interreflection", || {
-                let mut acc = resp.start();
-                for (src, d) in sources.iter().zip(&data) {
-                    let dc = self.coefficients(op, resp, src, &d.record);
-                    resp.add(&mut acc, src.normal_irradiance, &dc);
-                }
-                resp.sensors_of(&acc)
-            }),
-            (Some(op), None) => {
-                let weights =
-                    times.time("transfer_mesh", || self.mesh_weights(op, &sources, &data));
-                let e = mesh_irradiance(op.rows(), &sources, &weights);
-                let (next, rep) = times.time("interreflection", || op.solve(&e, previous));
-                if let Some(m) = &self.surfaces {
-                    let mut et = vec![Rgb::ZERO; op.rows()];
-                    for (src, w) in sources.iter().zip(&weights) {
-                        m.add_transmitted(&mut et, src, w, scene);
-                    }
-                    let sin_alt = report.sun.altitude_deg.to_radians().sin();
-                    let k = dni_dhi.map_or(1.0, |(dni, dhi)| {
-                        SurfaceMap::solar_scale(&sources, dni, dhi, sin_alt)
-                    });
-                    surfaces = m.values(op, Some(&next), &e, &et, k);
-                }
-                let ind = times.time("indirect_gather", || op.sensors(&next));
-                report.transport = Some(op.stats);
-                report.transport_solve = Some(rep);
-                state = Some(next);
-                ind
-            }
-            (None, _) => {
-                report.skipped.push(if needs_interreflection(scene) {
-                    "interreflection: no sensors and no surface output need it".into()
-                } else {
-                    "interreflection: every surface is black and nothing emits".into()
-                });
-                vec![TransportSensor::default(); scene.sensors.len()]
-            }
-        };
-
-        // Sensors, and the same gather one level coarser for the error estimate.
-        let mut values = Vec::new();
-        if scene.sensors.is_empty() {
-            report
-                .skipped
-                .push("sensor gather: the scene has no sensors".into());
-        } else {
-            let fine = times.time("sensors", || {
-                sensors_from_responses(&self.dirs, &sources, &data)
-            });
-            let coarse = times.time("error_estimate", || {
-                let cs = sources_for(sky, self.coarse.quality()).sources;
-                let cdata = self.coarse.get_all(&cs);
-                sensors_from_responses(&self.coarse, &cs, &cdata)
-            });
-            values = fine
-                .iter()
-                .zip(&coarse)
-                .zip(&indirect)
-                .map(|((f, c), i)| {
-                    report.counts.sensor_rays += f.rays + c.rays;
-                    SensorValue::estimate(f, c, i)
-                })
-                .collect();
-        }
-        report.error_model = ERROR_MODEL.into();
-        report.max_lux_err = values.iter().map(|v| v.lux_err).fold(0.0, f64::max);
-        report.max_relative_err = values
-            .iter()
-            .filter_map(|v| v.relative_error(1.0))
-            .fold(0.0, f64::max);
-        report.warnings.extend(sky.warnings.iter().cloned());
-        let dc = self.dirs.counts();
-        report.counts.ldis_built = dc.built as usize;
-        report.counts.ldis_reused = (dc.from_cache + dc.reused) as usize;
-        report.stage_seconds = times;
-        Step {
-            sensors: values,
-            state,
-            surfaces,
-            sky: None,
-            sources,
-            elements,
-            report,
-        }
+        self.note_skipped(&s.sources, report);
     }
 
     fn note_skipped(&self, sources: &[Source], report: &mut Report) {
@@ -409,7 +458,7 @@ impl<'a> Engine<'a> {
         &self,
         op: &Transport,
         sources: &[Source],
-        data: &[Arc<super::directions::DirectionData>],
+        data: &[Arc<DirectionData>],
     ) -> Vec<MeshWeights> {
         sources
             .par_iter()
