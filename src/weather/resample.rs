@@ -20,7 +20,7 @@ use chrono::{Datelike, TimeDelta};
 /// interpolated when `step` divides it.
 ///
 /// # Errors
-/// [`Error::Arg`]-style error for `--step` when `step` is 0, longer than the interval or
+/// An input error naming `--step` ([`Error::arg`]) when `step` is 0, longer than the interval or
 /// does not divide it.
 pub fn resample(weather: &Weather, step: u32) -> Result<Weather> {
     let interval = weather.interval_minutes;
