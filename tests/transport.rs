@@ -835,3 +835,35 @@ fn closed_room_with_unequal_reflectances_matches_the_exact_enclosure() {
         );
     }
 }
+
+#[test]
+fn furnace_stated_error_covers_what_the_solve_leaves_near_rho_one() {
+    // Through a whole step (no sky, emitting walls): the only error left in a closed box is
+    // the iterative solve's (every line ends on a face, so no noise and no discretisation),
+    // and it grows as ρ/(1 − ρ). The stated error must cover it at every sensor, and the
+    // answer must be within 0.5 %, 1 % and 2 % of M/(1 − ρ) at ρ = 0.9, 0.99, 0.999.
+    let mut q = daystep::sequence::Quality::preset("draft").unwrap();
+    q.transport = small();
+    for (rho, tol) in [(0.9, 0.005), (0.99, 0.01), (0.999, 0.02)] {
+        let scene = furnace(2.0, rho, 1.0);
+        let r = run(&scene, &daystep::sky::Sky::none(), &q);
+        let exact = lux_of(PI / (1.0 - rho));
+        let s = tol_report(&r, 0);
+        let err = (s.0 - exact).abs();
+        eprintln!(
+            "step furnace ρ {rho}: lux {:.1} exact {exact:.1} error {:.2e} stated {:.2e} (relative)",
+            s.0,
+            err / exact,
+            s.1 / exact
+        );
+        assert!(err <= s.1, "ρ {rho}: error {err} lx, stated {} lx", s.1);
+        assert!(err <= tol * exact, "ρ {rho}: {} > {tol}", err / exact);
+        // The bar is an estimate of the error, not a blanket: at most 10× the tolerance.
+        assert!(s.1 <= 10.0 * tol * exact, "ρ {rho}: stated {}", s.1 / exact);
+    }
+}
+
+/// (lux, lux_err) of sensor `k`.
+fn tol_report(r: &daystep::sequence::InstantResult, k: usize) -> (f64, f64) {
+    (r.sensors[k].lux, r.sensors[k].lux_err)
+}

@@ -5,8 +5,10 @@
 //! subdivision, sun grid, sensor visibility; [`super::config::Quality::coarser`]); the
 //! difference between per-child and per-node sky radiance; the visibility range of partly
 //! visible nodes; [`SKY_NORMALISATION_REL`] of the direct light; the indirect part's 1σ
-//! noise (standard error over independent operators); and its discretisation (the
-//! difference to the indirect light on the mesh one level coarser).
+//! noise (standard error over independent operators); its discretisation (the
+//! difference to the indirect light on the mesh one level coarser); and what the iterative
+//! solve left (its extrapolated relative iteration error, which grows as ρ/(1 − ρ) near
+//! ρ = 1, times the indirect light).
 
 use crate::photometry::lux;
 use crate::radiosity::TransportSensor;
@@ -22,7 +24,8 @@ pub const ERROR_MODEL: &str = "lux_err = |lux - lux at one coarser level| (sky s
     per-child and per-node sky radiance| + sum of the visibility range of partly visible nodes \
     at the deepest split + 2e-4 x lux (sky normalisation quadrature) + the indirect part's \
     1-sigma noise (standard error of the mean over independent line sets and sensor rays) + its \
-    discretisation (|indirect - indirect on the mesh one level coarser|)";
+    discretisation (|indirect - indirect on the mesh one level coarser|) + the solve's \
+    extrapolated relative iteration error x indirect";
 
 /// Illuminance at one sensor, lux.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -41,11 +44,13 @@ pub struct SensorValue {
 
 impl SensorValue {
     /// A sensor's value from its direct light at the run's quality (`fine`) and one level
-    /// coarser (`coarse`), and its interreflected light `indirect`.
+    /// coarser (`coarse`), and its interreflected light `indirect` from a solve whose
+    /// relative iteration error is `iteration_rel` (dimensionless).
     pub fn estimate(
         fine: &SensorDirect,
         coarse: &SensorDirect,
         indirect: &TransportSensor,
+        iteration_rel: f64,
     ) -> SensorValue {
         let direct = lux(fine.sun + fine.sky);
         let diff = (direct - lux(coarse.sun + coarse.sky)).abs();
@@ -59,7 +64,8 @@ impl SensorValue {
                 + fine.visibility_err_lux
                 + SKY_NORMALISATION_REL * direct.abs()
                 + lux(indirect.std_err)
-                + (ind - lux(indirect.irradiance + indirect.discretisation)).abs(),
+                + (ind - lux(indirect.irradiance + indirect.discretisation)).abs()
+                + iteration_rel * ind.abs(),
             lux_sun: lux(fine.sun),
             lux_sky: lux(fine.sky),
             lux_indirect: ind,
@@ -97,10 +103,11 @@ mod tests {
             std_err: Rgb::splat(0.02),
             discretisation: Rgb::splat(0.03),
         };
-        let v = SensorValue::estimate(&fine, &coarse, &ind);
+        let v = SensorValue::estimate(&fine, &coarse, &ind, 0.01);
         let k = 179.0;
         assert!((v.lux - 3.5 * k).abs() < 1e-9);
-        let expect = 0.1 * k + 0.01 * k + 3.0 + 2e-4 * 3.0 * k + 0.02 * k + 0.03 * k;
+        let expect =
+            0.1 * k + 0.01 * k + 3.0 + 2e-4 * 3.0 * k + 0.02 * k + 0.03 * k + 0.01 * 0.5 * k;
         assert!(
             (v.lux_err - expect).abs() < 1e-9,
             "{} vs {expect}",

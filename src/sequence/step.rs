@@ -85,6 +85,8 @@ pub struct Step {
 #[derive(Default)]
 struct Interreflected {
     sensors: Vec<TransportSensor>,
+    /// Relative error the iterative solve left (0 without interreflection).
+    iteration_error: f64,
     state: Option<TransportState>,
     surfaces: Vec<f64>,
 }
@@ -293,14 +295,7 @@ impl<'a> Engine<'a> {
         // 5. Interreflection.
         let light = self.interreflect(&sources, &data, previous, dni_dhi, &mut times, &mut report);
         // 6–7. Sensors and their stated error.
-        let sensors = self.sensor_values(
-            sky,
-            &sources,
-            &data,
-            &light.sensors,
-            &mut times,
-            &mut report,
-        );
+        let sensors = self.sensor_values(sky, &sources, &data, &light, &mut times, &mut report);
         report.warnings.extend(sky.warnings.iter().cloned());
         let dc = self.dirs.counts();
         report.counts.ldis_built = dc.built as usize;
@@ -340,6 +335,8 @@ impl<'a> Engine<'a> {
                     }
                     resp.sensors_of(&acc)
                 });
+                // The responses were solved to the operator's tolerance.
+                out.iteration_error = op.params.tolerance;
             }
             (Some(op), None) => {
                 let weights = times.time("transfer_mesh", || self.mesh_weights(op, sources, data));
@@ -359,6 +356,7 @@ impl<'a> Engine<'a> {
                 out.sensors = times.time("indirect_gather", || op.sensors(&next));
                 report.transport = Some(op.stats);
                 report.transport_solve = Some(rep);
+                out.iteration_error = rep.iteration_error;
                 out.state = Some(next);
             }
             (None, _) => {
@@ -374,13 +372,13 @@ impl<'a> Engine<'a> {
     }
 
     /// Stages 6–7: each sensor's direct light from its responses, the same one level
-    /// coarser, the interreflected light `indirect`, and the stated error.
+    /// coarser, the interreflected `light`, and the stated error.
     fn sensor_values(
         &self,
         sky: &Sky,
         sources: &[Source],
         data: &[Arc<DirectionData>],
-        indirect: &[TransportSensor],
+        light: &Interreflected,
         times: &mut StageTimes,
         report: &mut Report,
     ) -> Vec<SensorValue> {
@@ -402,10 +400,10 @@ impl<'a> Engine<'a> {
         let values: Vec<SensorValue> = fine
             .iter()
             .zip(&coarse)
-            .zip(indirect)
+            .zip(&light.sensors)
             .map(|((f, c), i)| {
                 report.counts.sensor_rays += f.rays + c.rays;
-                SensorValue::estimate(f, c, i)
+                SensorValue::estimate(f, c, i, light.iteration_error)
             })
             .collect();
         report.max_lux_err = values.iter().map(|v| v.lux_err).fold(0.0, f64::max);
