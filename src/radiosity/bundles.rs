@@ -28,7 +28,7 @@ pub(super) fn operator(
 ) -> (Sparse, u64) {
     let rows = mesh.elements.len();
     // One pixel size for every direction (uniform line density): the bounding sphere's
-    // diameter over `resolution`.
+    // diameter over `resolution`, or the elements' line-spacing floor where that is coarser.
     // Lines cover the whole scene: every element receives, so every element's line count
     // must be complete.
     let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
@@ -43,7 +43,8 @@ pub(super) fn operator(
     } else {
         1.0
     };
-    let pixel = diameter.max(1e-9) / resolution.max(1) as f64;
+    // Work sized to the scene: no finer than the elements need.
+    let pixel = (diameter.max(1e-9) / resolution.max(1) as f64).max(mesh.line_spacing_floor());
     let opaque: Vec<bool> = (0..pscene.vertices.len())
         .map(|t| pscene.glazing_tf[t].max_element() <= 0.0)
         .collect();

@@ -26,9 +26,45 @@ pub struct Mesh {
     pub coarse_rows: usize,
     /// The region of interest (min, max corners, scene frame, m).
     pub region: (DVec3, DVec3),
+    /// Largest element inside the region of interest, m² (what `Mesh::new` was given).
+    pub max_area: f64,
 }
 
+/// Lines per direction that cross an element of the region of interest face-on, at the
+/// coarsest line spacing a run uses ([`Mesh::line_spacing_floor`]).
+pub const LINES_PER_ELEMENT: f64 = 4.0;
+
 impl Mesh {
+    /// The coarsest line spacing (m) that still crosses every element of the region of
+    /// interest, but for the smallest ones holding 1 % of its area, with
+    /// [`LINES_PER_ELEMENT`] lines per direction. Lines finer than this only add work: the
+    /// noise of an element's row is set by the lines crossing it. In a small scene (a 2 m
+    /// box) the scene-wide spacing is far finer; in a room with its site it is coarser, and
+    /// this floor does not apply.
+    pub fn line_spacing_floor(&self) -> f64 {
+        let mut a: Vec<f64> = self
+            .area
+            .iter()
+            .copied()
+            .filter(|&x| x > 0.0 && x <= self.max_area * (1.0 + 1e-9))
+            .collect();
+        if a.is_empty() {
+            return 0.0;
+        }
+        a.sort_by(f64::total_cmp);
+        let total: f64 = a.iter().sum();
+        let mut acc = 0.0;
+        let mut q = a[0];
+        for x in a {
+            acc += x;
+            q = x;
+            if acc > 0.01 * total {
+                break;
+            }
+        }
+        (q / LINES_PER_ELEMENT).sqrt()
+    }
+
     /// Splits every triangle until its elements are at most `max_area` m² where they meet
     /// `region`, `far_area` m² elsewhere.
     pub fn new(scene: &Scene, max_area: f64, far_area: f64, region: (DVec3, DVec3)) -> Mesh {
@@ -73,6 +109,7 @@ impl Mesh {
             .collect();
         Mesh {
             region,
+            max_area,
             coarse_rows: coarse_id.len(),
             hierarchy: h,
             elements,
@@ -129,5 +166,45 @@ impl Mesh {
                 }
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::synthetic::SceneBuilder;
+
+    fn mesh_of(b: SceneBuilder, max_area: f64) -> Mesh {
+        let scene = b.build("test").unwrap();
+        let big = DVec3::splat(1e6);
+        Mesh::new(&scene, max_area, 4.0, (-big, big))
+    }
+
+    #[test]
+    fn line_spacing_floor_follows_the_elements_not_a_sliver() {
+        // A 2 m box: 2 m² half-faces split to 0.125 m² (≤ 0.25 m²), 4 lines per direction.
+        let mut b = SceneBuilder::new();
+        let m = b.add_opaque("wall", 0.5);
+        b.add_box("box", m, DVec3::ZERO, DVec3::splat(2.0));
+        let floor = mesh_of(b, 0.25).line_spacing_floor();
+        assert!(
+            (floor - (0.125f64 / LINES_PER_ELEMENT).sqrt()).abs() < 1e-12,
+            "{floor}"
+        );
+        // A sliver of 1e-6 m² holds far less than 1 % of the area: the floor stays.
+        let mut b = SceneBuilder::new();
+        let m = b.add_opaque("wall", 0.5);
+        b.add_box("box", m, DVec3::ZERO, DVec3::splat(2.0));
+        b.add_triangle(
+            "sliver",
+            m,
+            [
+                DVec3::new(5.0, 0.0, 0.0),
+                DVec3::new(5.001, 0.0, 0.0),
+                DVec3::new(5.0, 0.002, 0.0),
+            ],
+        );
+        let with_sliver = mesh_of(b, 0.25).line_spacing_floor();
+        assert_eq!(with_sliver, floor);
     }
 }
