@@ -37,6 +37,7 @@ const MAX_PANES: u32 = 32;
 pub struct Tracer {
     bvh: Bvh,
     normals: Vec<DVec3>,
+    areas: Vec<f64>,
     material: Vec<u32>,
     materials: Vec<Material>,
 }
@@ -121,6 +122,7 @@ impl Tracer {
         Tracer {
             bvh: Bvh::build(&tris),
             normals: scene.triangles.iter().map(|t| t.normal()).collect(),
+            areas: scene.triangles.iter().map(|t| t.area()).collect(),
             material: scene.triangles.iter().map(|t| t.material).collect(),
             materials: scene.materials.clone(),
         }
@@ -202,6 +204,34 @@ impl Tracer {
         out
     }
 
+    /// Among the opaque faces coincident with hit `h` (parallel to it, within
+    /// [`crate::projection::ldi::COINCIDENT_M`] beyond it), the one the LDIs show
+    /// ([`crate::projection::ldi::order_coincident`]): a face towards the ray's origin before
+    /// one facing away, then the smaller triangle; rounding then does not decide which of
+    /// a floor and the ground plane under it a ray reads.
+    fn settle(&self, origin: DVec3, dir: DVec3, h: Hit) -> Hit {
+        let eps = f64::from(crate::projection::ldi::COINCIDENT_M);
+        let key = |x: &Hit| (x.cos >= 0.0, self.areas[x.triangle as usize], x.triangle);
+        let better = |a: &Hit, b: &Hit| {
+            let (a, b) = (key(a), key(b));
+            a.0.cmp(&b.0)
+                .then(a.1.total_cmp(&b.1))
+                .then(a.2.cmp(&b.2))
+                .is_lt()
+        };
+        let mut best = h;
+        for x in self
+            .bvh
+            .all_hits(origin, dir, (h.t - eps).max(T_MIN_M), h.t + eps)
+        {
+            let parallel = self.normal(x.triangle).dot(self.normal(h.triangle)).abs() > 1.0 - 1e-9;
+            if parallel && !self.material_of(x.triangle).is_glazing() && better(&x, &best) {
+                best = x;
+            }
+        }
+        best
+    }
+
     /// Where a ray ends on the opaque triangle of hit `h`.
     fn opaque_end(&self, origin: DVec3, dir: DVec3, h: Hit) -> End {
         // `cos` is dir·n: negative when the ray meets the front face.
@@ -217,8 +247,19 @@ impl Tracer {
     }
 
     /// [`Tracer::walk`] with the glazing's angle taken from the ray itself.
+    /// A ray whose first surface is opaque ends, among coincident faces, on the one the
+    /// LDIs show ([`Self::settle`]), so what a sensor's gather reads does not depend on
+    /// rounding (behind glazing the plain walk decides).
     pub fn trace(&self, origin: DVec3, dir: DVec3, power: Rgb) -> Outcome {
-        self.walk(origin, dir, dir, power)
+        match self.bvh.closest_hit(origin, dir, T_MIN_M, f64::INFINITY) {
+            Some(h) if !self.material_of(h.triangle).is_glazing() => Outcome {
+                end: self.opaque_end(origin, dir, self.settle(origin, dir, h)),
+                power,
+                glazing_loss: Rgb::ZERO,
+                panes: 0,
+            },
+            _ => self.walk(origin, dir, dir, power),
+        }
     }
 
     /// Transmission (per channel) from `origin` to infinity along unit `dir`: glazing

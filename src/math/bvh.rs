@@ -460,6 +460,25 @@ impl Bvh {
         }
     }
 
+    /// Every hit with `t_min < t < t_max`, in no particular order and with coplanar
+    /// duplicates kept: what the coincident-face rule needs to see all of a floor and the
+    /// ground plane under it. `dir` must be a unit vector.
+    pub fn all_hits(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Vec<Hit> {
+        let ray = Ray::new(origin, dir);
+        let mut hits = Vec::new();
+        self.traverse(&ray, t_min, t_max, |i, _| {
+            if let Some((t, cos, _)) = ray.hit_triangle(&self.tris[i], t_min, t_max) {
+                hits.push(Hit {
+                    triangle: self.ids[i],
+                    t,
+                    cos,
+                });
+            }
+            true
+        });
+        hits
+    }
+
     /// The nearest hit with `t_min < t < t_max` (ties by lowest triangle index), if any.
     /// `dir` must be a unit vector.
     pub fn closest_hit(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<Hit> {
