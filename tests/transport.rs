@@ -848,7 +848,7 @@ fn furnace_stated_error_covers_what_the_solve_leaves_near_rho_one() {
         let scene = furnace(2.0, rho, 1.0);
         let r = run(&scene, &daystep::sky::Sky::none(), &q);
         let exact = lux_of(PI / (1.0 - rho));
-        let s = tol_report(&r, 0);
+        let s = (r.sensors[0].lux, r.sensors[0].lux_err);
         let err = (s.0 - exact).abs();
         eprintln!(
             "step furnace ρ {rho}: lux {:.1} exact {exact:.1} error {:.2e} stated {:.2e} (relative)",
@@ -861,9 +861,4 @@ fn furnace_stated_error_covers_what_the_solve_leaves_near_rho_one() {
         // The bar is an estimate of the error, not a blanket: at most 10× the tolerance.
         assert!(s.1 <= 10.0 * tol * exact, "ρ {rho}: stated {}", s.1 / exact);
     }
-}
-
-/// (lux, lux_err) of sensor `k`.
-fn tol_report(r: &daystep::sequence::InstantResult, k: usize) -> (f64, f64) {
-    (r.sensors[k].lux, r.sensors[k].lux_err)
 }

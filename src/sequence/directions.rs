@@ -50,14 +50,14 @@ pub struct DirectionCounts {
 /// The per-direction data of one scene and quality, cached on disk and in memory.
 pub struct Directions<'a> {
     scene: &'a Scene,
-    pscene: ProjectionScene,
+    /// The scene as projections see it; `None` when directions are not projected (sensor
+    /// responses only, for the coarser level of the error estimate, which reads no
+    /// projection).
+    pscene: Option<ProjectionScene>,
     vis: Arc<Tracer>,
     store: &'a Store,
     hash: SceneHash,
     quality: Quality,
-    /// Whether directions are projected (false: sensor responses only, for the coarser
-    /// level of the error estimate, which reads no projection).
-    project: bool,
     memo: Mutex<HashMap<(SourceKey, u32), Arc<DirectionData>>>,
     built: AtomicU64,
     from_cache: AtomicU64,
@@ -106,12 +106,11 @@ impl<'a> Directions<'a> {
         extra.extend_from_slice(&s.sample_angle_deg.to_bits().to_le_bytes());
         Directions {
             scene,
-            pscene: ProjectionScene::new(scene),
+            pscene: project.then(|| ProjectionScene::new(scene)),
             vis: tracer,
             store,
             hash: cache::scene_hash(scene, &quality.projection, &extra),
             quality: *quality,
-            project,
             memo: Mutex::new(HashMap::new()),
             built: AtomicU64::new(0),
             from_cache: AtomicU64::new(0),
@@ -217,15 +216,11 @@ impl<'a> Directions<'a> {
     }
 
     fn compute(&self, source: &Source, resolution: u32) -> DirectionData {
-        let record = if self.scene.triangles.is_empty() || !self.project {
-            DirectionRecord::default()
-        } else {
-            projection::project(
-                &self.pscene,
-                source.direction,
-                resolution,
-                &self.quality.projection,
-            )
+        let record = match &self.pscene {
+            Some(p) if !self.scene.triangles.is_empty() => {
+                projection::project(p, source.direction, resolution, &self.quality.projection)
+            }
+            _ => DirectionRecord::default(),
         };
         let mut rays = 0;
         let sensors = self
