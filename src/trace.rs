@@ -33,6 +33,10 @@ const MAX_PANES: u32 = 32;
 
 /// Ray-casting view of a scene: BVH, unit front normals, materials. Build it once per
 /// geometry and share it (`&Tracer`) between the sensors and the interreflection.
+///
+/// The BVH holds the model's triangles only: a back face ([`crate::scene::faces`]) is its
+/// front triangle met from behind, so a ray that meets a triangle's back reports the back
+/// face instead, and two-sided surfaces cost no extra ray work.
 #[derive(Clone, Debug)]
 pub struct Tracer {
     bvh: Bvh,
@@ -40,6 +44,11 @@ pub struct Tracer {
     areas: Vec<f64>,
     material: Vec<u32>,
     materials: Vec<Material>,
+    /// Opposite face of each triangle (`u32::MAX`: none); see [`crate::scene::Scene::twin`].
+    twin: Vec<u32>,
+    /// Whether a model triangle has a coincident parallel opaque face other than its own
+    /// back (a floor on the ground): only its hits need [`Self::settle`]'s second query.
+    coincident: Vec<bool>,
 }
 
 /// The first triangle a ray meets ([`Tracer::first_hit`]).
@@ -118,13 +127,35 @@ impl Outcome {
 impl Tracer {
     /// Builds the BVH over the scene's triangles.
     pub fn new(scene: &Scene) -> Tracer {
-        let tris: Vec<[DVec3; 3]> = scene.triangles.iter().map(|t| t.v).collect();
+        let model = &scene.triangles[..scene.input_triangles];
+        let tris: Vec<[DVec3; 3]> = model.iter().map(|t| t.v).collect();
+        let normals: Vec<DVec3> = scene.triangles.iter().map(|t| t.normal()).collect();
+        let opaque: Vec<bool> = model
+            .iter()
+            .map(|t| !scene.materials[t.material as usize].is_glazing())
+            .collect();
         Tracer {
             bvh: Bvh::build(&tris),
-            normals: scene.triangles.iter().map(|t| t.normal()).collect(),
+            coincident: coincident_faces(&tris, &normals, &opaque),
+            normals,
             areas: scene.triangles.iter().map(|t| t.area()).collect(),
             material: scene.triangles.iter().map(|t| t.material).collect(),
             materials: scene.materials.clone(),
+            twin: scene.twin.clone(),
+        }
+    }
+
+    /// The face hit `h` (on a model triangle) shows to the ray: the triangle's back face
+    /// when the ray meets its back and it has one.
+    fn face(&self, h: Hit) -> Hit {
+        match self.twin.get(h.triangle as usize) {
+            // Back faces come after their model triangle: a hit already on one stays.
+            Some(&t) if h.cos >= 0.0 && t != u32::MAX && t > h.triangle => Hit {
+                triangle: t,
+                cos: -h.cos,
+                ..h
+            },
+            _ => h,
         }
     }
 
@@ -141,7 +172,7 @@ impl Tracer {
     /// The first triangle (opaque or glazing) the ray `origin + t·dir` (unit `dir`) meets
     /// beyond [`T_MIN_M`], or `None` when it leaves the scene.
     pub fn first_hit(&self, origin: DVec3, dir: DVec3) -> Option<FirstHit> {
-        let h = self.bvh.closest_hit(origin, dir, T_MIN_M, f64::INFINITY)?;
+        let h = self.face(self.bvh.closest_hit(origin, dir, T_MIN_M, f64::INFINITY)?);
         Some(FirstHit {
             tri: h.triangle,
             point: origin + dir * h.t,
@@ -210,6 +241,14 @@ impl Tracer {
     /// one facing away, then the smaller triangle; rounding then does not decide which of
     /// a floor and the ground plane under it a ray reads.
     fn settle(&self, origin: DVec3, dir: DVec3, h: Hit) -> Hit {
+        let h = self.face(h);
+        let model = |t: u32| match self.twin.get(t as usize) {
+            Some(&f) if f < t => f,
+            _ => t,
+        };
+        if !self.coincident[model(h.triangle) as usize] {
+            return h;
+        }
         let eps = f64::from(crate::projection::ldi::COINCIDENT_M);
         let key = |x: &Hit| (x.cos >= 0.0, self.areas[x.triangle as usize], x.triangle);
         let better = |a: &Hit, b: &Hit| {
@@ -224,6 +263,7 @@ impl Tracer {
             .bvh
             .all_hits(origin, dir, (h.t - eps).max(T_MIN_M), h.t + eps)
         {
+            let x = self.face(x);
             let parallel = self.normal(x.triangle).dot(self.normal(h.triangle)).abs() > 1.0 - 1e-9;
             if parallel && !self.material_of(x.triangle).is_glazing() && better(&x, &best) {
                 best = x;
@@ -234,6 +274,7 @@ impl Tracer {
 
     /// Where a ray ends on the opaque triangle of hit `h`.
     fn opaque_end(&self, origin: DVec3, dir: DVec3, h: Hit) -> End {
+        let h = self.face(h);
         // `cos` is dir·n: negative when the ray meets the front face.
         if h.cos < 0.0 {
             End::Front {
@@ -306,6 +347,114 @@ impl Tracer {
         planes.push((n, n.dot(apex) + T_MIN_M));
         !self.bvh.any_in_region(&planes)
     }
+}
+
+/// For each triangle, whether another opaque triangle lies in its plane (parallel, within
+/// [`crate::projection::ldi::COINCIDENT_M`]) and overlaps it with positive area: a floor on
+/// a ground plane, a desk on a floor. Triangles sharing only an edge (a quad's halves) do
+/// not count. Sorted by plane offset, then swept along one axis, so a large flat site of
+/// many triangles stays near-linear.
+fn coincident_faces(tris: &[[DVec3; 3]], normals: &[DVec3], opaque: &[bool]) -> Vec<bool> {
+    let eps = f64::from(crate::projection::ldi::COINCIDENT_M);
+    let n = tris.len();
+    let mut flag = vec![false; n];
+    // Canonical normal: the largest component positive, so parallel faces facing opposite
+    // ways share one plane offset.
+    let canon = |m: DVec3| {
+        let a = m.abs();
+        let c = if a.x >= a.y && a.x >= a.z {
+            m.x
+        } else if a.y >= a.z {
+            m.y
+        } else {
+            m.z
+        };
+        if c < 0.0 {
+            -m
+        } else {
+            m
+        }
+    };
+    let nc: Vec<DVec3> = (0..n).map(|i| canon(normals[i])).collect();
+    let centre = |i: usize| (tris[i][0] + tris[i][1] + tris[i][2]) / 3.0;
+    let offset: Vec<f64> = (0..n).map(|i| nc[i].dot(centre(i))).collect();
+    let bounds = |i: usize| {
+        let t = &tris[i];
+        (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]))
+    };
+    let mut order: Vec<usize> = (0..n).filter(|&i| opaque[i] && nc[i].is_finite()).collect();
+    order.sort_by(|&a, &b| offset[a].total_cmp(&offset[b]));
+    let mut start = 0;
+    while start < order.len() {
+        // A run of offsets each within eps of the previous one.
+        let mut end = start + 1;
+        while end < order.len() && offset[order[end]] - offset[order[end - 1]] < eps {
+            end += 1;
+        }
+        if end - start > 1 {
+            let mut run: Vec<(usize, DVec3, DVec3)> = order[start..end]
+                .iter()
+                .map(|&i| {
+                    let (lo, hi) = bounds(i);
+                    (i, lo, hi)
+                })
+                .collect();
+            run.sort_by(|a, b| a.1.x.total_cmp(&b.1.x));
+            for a in 0..run.len() {
+                let (i, lo_i, hi_i) = run[a];
+                for &(j, lo_j, hi_j) in &run[a + 1..] {
+                    if lo_j.x > hi_i.x + eps {
+                        break;
+                    }
+                    let boxes_meet = (lo_i - DVec3::splat(eps)).cmple(hi_j).all()
+                        && (lo_j - DVec3::splat(eps)).cmple(hi_i).all();
+                    if boxes_meet
+                        && nc[i].dot(nc[j]) > 1.0 - 1e-9
+                        && (offset[i] - offset[j]).abs() < eps
+                        && overlap_in_plane(&tris[i], &tris[j], nc[i])
+                    {
+                        flag[i] = true;
+                        flag[j] = true;
+                    }
+                }
+            }
+        }
+        start = end;
+    }
+    flag
+}
+
+/// Whether two (near-)coplanar triangles overlap with positive area in the plane with
+/// unit normal `n` (separating-axis test; touching at an edge or a vertex is no overlap).
+fn overlap_in_plane(a: &[DVec3; 3], b: &[DVec3; 3], n: DVec3) -> bool {
+    let (u, v) = basis(n);
+    let to2 = |t: &[DVec3; 3]| t.map(|p| glam::DVec2::new(u.dot(p), v.dot(p)));
+    let (pa, pb) = (to2(a), to2(b));
+    let scale = pa
+        .iter()
+        .chain(&pb)
+        .fold(0.0f64, |m, p| m.max(p.abs().max_element()))
+        .max(1.0);
+    let tol = 1e-9 * scale;
+    for tri in [&pa, &pb] {
+        for k in 0..3 {
+            let e = tri[(k + 1) % 3] - tri[k];
+            let axis = glam::DVec2::new(-e.y, e.x);
+            let span = |t: &[glam::DVec2; 3]| {
+                t.iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                        let x = axis.dot(*p);
+                        (lo.min(x), hi.max(x))
+                    })
+            };
+            let ((a0, a1), (b0, b1)) = (span(&pa), span(&pb));
+            let tol = tol * axis.length();
+            if a1 <= b0 + tol || b1 <= a0 + tol {
+                return false;
+            }
+        }
+    }
+    true
 }
 
 /// Uniform barycentric coordinates on a triangle from two uniforms.
@@ -439,8 +588,18 @@ mod tests {
         let t = tracer.transmission_for(DVec3::new(0.0, 0.0, -0.5), up, sun);
         let tau_sun = glass.transmittance(0.8);
         assert!((t - tau_sun * tau_sun).abs().max_element() < 1e-15);
-        // From below the floor: its back face stops the ray.
+        // From below the floor: the ray ends on the floor's back face, facing it.
         let out = tracer.trace(DVec3::new(0.0, 0.0, -2.0), up, Rgb::ONE);
+        let End::Front { tri, cos, .. } = out.end else {
+            panic!("{:?}", out.end)
+        };
+        assert!(tri as usize >= scene.input_triangles && scene.twin[tri as usize] < 2);
+        assert!((cos - 1.0).abs() < 1e-15 && tracer.normal(tri).z < -0.999);
+        // One-sided (`faces = "front"`): the floor's back is black, the ray absorbed there.
+        let mut front = scene.clone();
+        front.triangles.truncate(front.input_triangles);
+        front.twin.clear();
+        let out = Tracer::new(&front).trace(DVec3::new(0.0, 0.0, -2.0), up, Rgb::ONE);
         assert_eq!(
             out.end,
             End::Back {

@@ -312,7 +312,8 @@ fn surfaces_report_incident_and_transmitted_solar_per_group() {
     let mut lines = text.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "time,plate:irradiance_w_m2,pane:irradiance_w_m2,pane:transmitted_w"
+        "time,plate:irradiance_w_m2,pane:irradiance_w_m2,pane:transmitted_w,\
+         plate (back):irradiance_w_m2"
     );
     let rows: Vec<Vec<f64>> = lines
         .map(|l| l.split(',').skip(1).map(|v| v.parse().unwrap()).collect())
@@ -348,8 +349,11 @@ fn surfaces_report_incident_and_transmitted_solar_per_group() {
             "{hour}: plate {:.2} pane {:.2} (GHI {ghi:.2}); transmitted {:.2} in [{lo:.2}, {hi:.2}]",
             row[0], row[1], row[2]
         );
+        // The plate's back face looks down at a black ground (the builder's ground
+        // reflectance is 0): nothing arrives on its side, whatever the sky.
+        assert_eq!(row[3], 0.0, "plate (back)");
         if ghi == 0.0 {
-            assert_eq!(row, &vec![0.0, 0.0, 0.0]);
+            assert_eq!(row, &vec![0.0; 4]);
             continue;
         }
         // The sky's discretisation into sources: 1 % (the stated error of the draft sky).

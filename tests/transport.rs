@@ -105,6 +105,17 @@ fn room(rho: f64) -> Scene {
 }
 
 /// Direct irradiance `e` on the floor rows (normal +z), zero elsewhere.
+/// Rows on the model's own faces (not the back faces two-sided surfaces add): a closed
+/// room's inner faces when the room is modelled facing inwards.
+fn model_rows<'a>(t: &'a Transport, scene: &'a Scene) -> impl Iterator<Item = usize> + 'a {
+    (0..t.rows()).filter(move |&r| {
+        (t.mesh.hierarchy.elements[t.mesh.elements[r] as usize]
+            .key
+            .tri as usize)
+            < scene.input_triangles
+    })
+}
+
 fn floor_light(t: &Transport, e: f64) -> Vec<Rgb> {
     t.mesh
         .elements
@@ -127,10 +138,12 @@ fn uniform_closed_room_conserves_energy_and_warm_start_equals_cold() {
     let rho = 0.6;
     let scene = room(rho);
     let t = Transport::build(&scene, &scene.sensors, &small());
-    let total_area: f64 = t.mesh.area.iter().sum();
+    // Two-sided: the outer faces are there too, and must not change the inside.
+    assert!(scene.triangles.len() > scene.input_triangles);
+    let total_area: f64 = model_rows(&t, &scene).map(|r| t.mesh.area[r]).sum();
     assert!((total_area - 96.0).abs() < 1e-9);
     let mean_e = |st: &daystep::radiosity::TransportState| {
-        (0..t.rows())
+        model_rows(&t, &scene)
             .map(|r| t.indirect_irradiance(st, r).x * t.mesh.area[r])
             .sum::<f64>()
             / total_area
@@ -369,7 +382,7 @@ fn emitter_under_a_pane_sees_its_mirror_image() {
     // The emitter's own rows near the centre receive the same; their estimates come from
     // disjoint lines, so the standard error of their mean is their spread over √k.
     let mut vals = Vec::new();
-    for r in 0..t.rows() {
+    for r in model_rows(&t, &scene) {
         let el = &t.mesh.hierarchy.elements[t.mesh.elements[r] as usize];
         let c = (el.vertices[0] + el.vertices[1] + el.vertices[2]) / 3.0;
         if c.z < 0.1 && c.x.abs() < 2.0 && c.y.abs() < 2.0 {
@@ -808,8 +821,8 @@ fn closed_room_with_unequal_reflectances_matches_the_exact_enclosure() {
     };
     let t = Transport::build(&scene, &scene.sensors, &p);
     let (st, _) = t.solve(&floor_light(&t, 100.0), None);
-    let total: f64 = t.mesh.area.iter().sum();
-    let m = (0..t.rows())
+    let total: f64 = model_rows(&t, &scene).map(|r| t.mesh.area[r]).sum();
+    let m = model_rows(&t, &scene)
         .map(|r| t.indirect_irradiance(&st, r).x * t.mesh.area[r])
         .sum::<f64>()
         / total;

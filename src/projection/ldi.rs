@@ -107,6 +107,8 @@ pub struct Ldi {
     fragments: Vec<Fragment>,
     /// Per-triangle factor applied to light passing it along this direction.
     pass: Vec<Rgb>,
+    /// Opposite face of each triangle ([`ProjectionScene::twin`]).
+    twin: Vec<u32>,
 }
 
 impl Ldi {
@@ -198,11 +200,18 @@ impl Ldi {
                 t.map(|p| camera.height_of(p)),
             )
         };
+        // A back face lies on its front triangle: one rasterisation gives both fragments,
+        // at the same pixels and heights (then `order_coincident` puts the face towards
+        // the source first).
         let mut counts = vec![0u32; n_pix + 1];
-        for t in &scene.vertices {
+        for (k, t) in scene.vertices.iter().enumerate() {
+            if scene.is_back_face(k) {
+                continue;
+            }
+            let faces = 1 + u32::from(scene.back_of(k).is_some());
             let (p, h) = project(t);
             raster::rasterize(p, h, width, height, |i, j, _| {
-                counts[j as usize * width as usize + i as usize] += 1;
+                counts[j as usize * width as usize + i as usize] += faces;
             });
         }
         let mut offsets = counts;
@@ -222,15 +231,21 @@ impl Ldi {
             acc as usize
         ];
         for (k, t) in scene.vertices.iter().enumerate() {
+            if scene.is_back_face(k) {
+                continue;
+            }
+            let back = scene.back_of(k);
             let (p, h) = project(t);
             raster::rasterize(p, h, width, height, |i, j, z| {
                 let px = j as usize * width as usize + i as usize;
-                fragments[fill[px] as usize] = Fragment {
-                    tri: k as u32,
-                    height: z as f32,
-                    t_in: [0.0; 3],
-                };
-                fill[px] += 1;
+                for tri in std::iter::once(k as u32).chain(back) {
+                    fragments[fill[px] as usize] = Fragment {
+                        tri,
+                        height: z as f32,
+                        t_in: [0.0; 3],
+                    };
+                    fill[px] += 1;
+                }
             });
         }
         let pass: Vec<Rgb> = (0..scene.vertices.len())
@@ -252,6 +267,7 @@ impl Ldi {
             offsets,
             fragments,
             pass,
+            twin: scene.twin.clone(),
         }
     }
 
@@ -267,15 +283,18 @@ impl Ldi {
     }
 
     /// Transmission (per channel) of light reaching height `h` in pixel `(i, j)` along the
-    /// line, ignoring fragments of triangle `skip` (the receiver itself).
+    /// line, ignoring fragments of triangle `skip` (the receiver itself) and of its other
+    /// face: a point off the pixel centre lies below its own plane's fragment there when
+    /// the plane is tilted to the line, and a surface does not shadow itself.
     pub fn transmission_at(&self, i: u32, j: u32, h: f64, skip: u32) -> Rgb {
         let mut t = Rgb::ONE;
         let eps = 1e-6 * (1.0 + h.abs());
+        let twin = self.twin.get(skip as usize).copied().unwrap_or(u32::MAX);
         for f in self.pixel(i, j) {
             if (f.height as f64) <= h + eps {
                 break;
             }
-            if f.tri != skip {
+            if f.tri != skip && f.tri != twin {
                 t *= self.pass[f.tri as usize];
                 if t == Rgb::ZERO {
                     break;
@@ -319,6 +338,7 @@ mod tests {
             material: tris.iter().map(|(_, m)| *m).collect(),
             vertices: tris.into_iter().map(|(v, _)| v).collect(),
             materials,
+            twin: Vec::new(),
         }
     }
 

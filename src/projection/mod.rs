@@ -128,6 +128,9 @@ pub struct ProjectionScene {
     pub material: Vec<u32>,
     /// Materials.
     pub materials: Vec<crate::scene::Material>,
+    /// Opposite face of each triangle (`u32::MAX`: none), as [`Scene::twin`]; empty when
+    /// no triangle has one. A back face is rasterised with its front triangle.
+    pub twin: Vec<u32>,
 }
 
 impl ProjectionScene {
@@ -144,7 +147,21 @@ impl ProjectionScene {
                 .collect(),
             material: t.iter().map(|t| t.material).collect(),
             materials: scene.materials.clone(),
+            twin: scene.twin.clone(),
         }
+    }
+
+    /// The back face of model triangle `tri`, if it has one.
+    pub fn back_of(&self, tri: usize) -> Option<u32> {
+        self.twin
+            .get(tri)
+            .copied()
+            .filter(|&t| t != u32::MAX && t as usize > tri)
+    }
+
+    /// Whether `tri` is a back face (rasterised with its front triangle).
+    pub fn is_back_face(&self, tri: usize) -> bool {
+        self.twin.get(tri).is_some_and(|&t| (t as usize) < tri)
     }
 
     /// Factor a fragment of triangle `tri` applies to light travelling along `dir`:

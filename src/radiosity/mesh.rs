@@ -30,6 +30,10 @@ pub struct Mesh {
     pub max_area: f64,
 }
 
+/// Largest far element (outside the region of interest) per squared distance from the
+/// region, m²/m²: an element's edge is then about half its distance.
+pub const FAR_AREA_PER_D2: f64 = 0.1;
+
 /// Lines per direction that cross an element of the region of interest face-on, at the
 /// coarsest line spacing a run uses ([`Mesh::line_spacing_floor`]).
 pub const LINES_PER_ELEMENT: f64 = 4.0;
@@ -66,7 +70,8 @@ impl Mesh {
     }
 
     /// Splits every triangle until its elements are at most `max_area` m² where they meet
-    /// `region`, `far_area` m² elsewhere.
+    /// `region`, elsewhere `far_area` m² or [`FAR_AREA_PER_D2`] × the squared distance from
+    /// the region, whichever is larger.
     pub fn new(scene: &Scene, max_area: f64, far_area: f64, region: (DVec3, DVec3)) -> Mesh {
         let mut h = Hierarchy::new(scene);
         let meets = |v: &[DVec3; 3]| {
@@ -74,13 +79,24 @@ impl Mesh {
             let hi = v[0].max(v[1]).max(v[2]);
             lo.cmple(region.1).all() && hi.cmpge(region.0).all()
         };
+        // Beyond the region an element may grow with its distance d from it: at most
+        // FAR_AREA_PER_D2 · d² (an edge about half the distance), so a site of any extent
+        // costs a number of rows that grows with the logarithm of its size, and every far
+        // element still subtends a bounded angle from the room.
+        let distance = |v: &[DVec3; 3]| {
+            let lo = v[0].min(v[1]).min(v[2]);
+            let hi = v[0].max(v[1]).max(v[2]);
+            (region.0 - hi).max(lo - region.1).max(DVec3::ZERO).length()
+        };
         let mut i = 0;
         while i < h.elements.len() {
             let e = &h.elements[i];
             let limit = if meets(&e.vertices) {
                 max_area
             } else {
-                far_area.max(max_area)
+                far_area
+                    .max(max_area)
+                    .max(FAR_AREA_PER_D2 * distance(&e.vertices).powi(2))
             };
             if e.area > limit && e.key.depth() + 1 < MAX_DEPTH.min(16) {
                 let k = e.key.child(0);

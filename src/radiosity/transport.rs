@@ -109,6 +109,24 @@ impl Default for TransportParams {
     }
 }
 
+/// Area (m²) of triangle `v` inside the box `region`, to within the elements of a
+/// 12-level midpoint split of the triangles that cross its boundary.
+fn area_within(v: [DVec3; 3], region: (DVec3, DVec3), depth: u32) -> f64 {
+    let lo = v[0].min(v[1]).min(v[2]);
+    let hi = v[0].max(v[1]).max(v[2]);
+    let area = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
+    if lo.cmpgt(region.1).any() || hi.cmplt(region.0).any() {
+        0.0
+    } else if (lo.cmpge(region.0) & hi.cmple(region.1)).all() || depth >= 12 {
+        area
+    } else {
+        crate::hierarchy::split(v)
+            .into_iter()
+            .map(|c| area_within(c, region, depth + 1))
+            .sum()
+    }
+}
+
 /// One independent estimate: the operator (E_i = Σ_j F_ij B_j, W/m² per W/m²) and the
 /// sensor gather (E_k = Σ_j G_kj B_j).
 #[derive(Clone, Debug, Default)]
@@ -172,16 +190,12 @@ impl Transport {
             ((a - m).max(lo), (b + m).min(hi))
         };
         // Bound the unknowns (memory and time grow with rows × links): a large region
-        // gets coarser elements.
+        // gets coarser elements. Only the part of each triangle inside the region counts: a
+        // site's ground plane or a large emitter crossing it must not coarsen the room.
         let area_in_region: f64 = scene
             .triangles
             .iter()
-            .filter(|t| {
-                let lo = t.v[0].min(t.v[1]).min(t.v[2]);
-                let hi = t.v[0].max(t.v[1]).max(t.v[2]);
-                lo.cmple(region.1).all() && hi.cmpge(region.0).all()
-            })
-            .map(|t| t.area())
+            .map(|t| area_within(t.v, region, 0))
             .sum();
         let element_area = params
             .element_area_m2

@@ -2,6 +2,7 @@
 //! converted to one frame: metres, right-handed, x east, y north, z up, with a local origin
 //! subtracted so far-from-origin models keep full precision.
 
+pub mod faces;
 pub mod material;
 pub mod obj;
 mod mtl;
@@ -14,6 +15,7 @@ use crate::site::Site;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
 
+pub use faces::Faces;
 pub use material::Material;
 
 /// One input triangle in the scene frame (metres, origin-subtracted, ENU).
@@ -62,8 +64,16 @@ pub struct Sensor {
 pub struct Scene {
     /// The scene file it came from (or a descriptive pseudo-path for generated scenes).
     pub path: PathBuf,
-    /// All triangles with positive area.
+    /// All triangles with positive area: the model's (`..input_triangles`), then the back
+    /// faces [`faces::add_back_faces`] made (`input_triangles..`).
     pub triangles: Vec<Triangle>,
+    /// Number of the model's own triangles (the rest are back faces).
+    pub input_triangles: usize,
+    /// Which faces reflect ([`Faces`]).
+    pub faces: Faces,
+    /// The opposite face of each triangle (`u32::MAX` for none: glazing, or `faces =
+    /// "front"`). Empty when no triangle has one.
+    pub twin: Vec<u32>,
     /// Materials referenced by triangles.
     pub materials: Vec<Material>,
     /// Group names referenced by triangles.
@@ -137,6 +147,8 @@ pub struct ModelInput {
     pub site: Site,
     /// Ground reflectance, [0, 1).
     pub ground_reflectance: f64,
+    /// Which faces of opaque surfaces reflect.
+    pub faces: Faces,
 }
 
 /// Converts a Y-up point to Z-up: (x, y, z) → (x, −z, y) (glTF/Blender convention).
@@ -147,7 +159,8 @@ pub fn y_up_to_z_up(p: DVec3) -> DVec3 {
 impl Scene {
     /// Builds a scene from model-frame input: rotates model north onto true north, moves
     /// the origin to the centre of the bounds (so coordinates far from the origin keep
-    /// precision), drops degenerate triangles (counted) and checks that everything is finite.
+    /// precision), drops degenerate triangles (counted), checks that everything is finite
+    /// and, for [`Faces::Both`], adds the back faces ([`faces::add_back_faces`]).
     ///
     /// # Errors
     /// [`crate::Error::Input`] for non-finite coordinates (or coordinates so near `f64::MAX`
@@ -262,9 +275,13 @@ impl Scene {
                 input_position: *p,
             });
         }
-        Ok(Scene {
+        let input_triangles = triangles.len();
+        let mut scene = Scene {
             path: path.to_path_buf(),
             triangles,
+            input_triangles,
+            faces: Faces::Front,
+            twin: Vec::new(),
             materials: input.materials,
             groups: input.groups,
             sensors,
@@ -273,6 +290,10 @@ impl Scene {
             origin,
             dropped_degenerate: dropped,
             warnings: Vec::new(),
-        })
+        };
+        if input.faces == Faces::Both {
+            faces::add_back_faces(&mut scene);
+        }
+        Ok(scene)
     }
 }

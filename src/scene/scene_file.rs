@@ -4,7 +4,7 @@
 //! Unknown keys are not errors but warnings, so files written for a newer daystep still load.
 //! Values are read as [`toml::Spanned`] so that range errors name their line.
 
-use super::{obj, sensors, ModelInput, Scene};
+use super::{obj, sensors, Faces, ModelInput, Scene};
 use crate::error::{Error, Result};
 use crate::files;
 use crate::site::Site;
@@ -19,8 +19,9 @@ pub const NO_SITE_WARNING: &str =
     "no [site] table: using the default site (Greenwich, UTC) unless a weather file gives one";
 
 /// Top-level keys of a scene file.
-const KNOWN_KEYS: [&str; 6] = [
+const KNOWN_KEYS: [&str; 7] = [
     "geometry",
+    "faces",
     "sensors",
     "up",
     "north_deg",
@@ -38,6 +39,7 @@ struct SceneToml {
     up: Option<Spanned<String>>,
     north_deg: Option<Spanned<f64>>,
     ground_reflectance: Option<Spanned<f64>>,
+    faces: Option<Spanned<String>>,
     site: Option<SiteToml>,
 }
 
@@ -77,6 +79,7 @@ pub fn load(path: &Path) -> Result<Scene> {
         north_deg: parsed.north_deg,
         site: parsed.site,
         ground_reflectance: parsed.ground_reflectance,
+        faces: parsed.faces,
     };
     let mut scene = Scene::from_model(path, input)?;
     let mut warnings = parsed.warnings;
@@ -96,6 +99,7 @@ struct Parsed {
     y_up: bool,
     north_deg: f64,
     ground_reflectance: f64,
+    faces: Faces,
     site: Site,
     warnings: Vec<String>,
 }
@@ -186,6 +190,23 @@ fn parse(path: &Path, text: &str) -> Result<Parsed> {
         },
     };
 
+    let faces = match &raw.faces {
+        None => Faces::Both,
+        Some(f) => match f.get_ref().to_ascii_lowercase().as_str() {
+            "both" => Faces::Both,
+            "front" => Faces::Front,
+            _ => {
+                return Err(Error::input(
+                    path,
+                    at(f.span()),
+                    Some(f.get_ref()),
+                    "`faces` must be \"both\" (opaque surfaces reflect on both faces, as \
+                     Radiance) or \"front\" (only the face the OBJ normal points to)",
+                ))
+            }
+        },
+    };
+
     // A number with its allowed range; `None` range = any finite value.
     let check = |key: &str, v: &Spanned<f64>, range: Option<(f64, f64, bool)>| -> Result<f64> {
         let x = *v.get_ref();
@@ -245,6 +266,7 @@ fn parse(path: &Path, text: &str) -> Result<Parsed> {
         y_up,
         north_deg,
         ground_reflectance,
+        faces,
         site,
         warnings,
     })
@@ -340,10 +362,13 @@ f 1 2 4
             "geometry = \"geo/a.obj\"\nsensors = \"s.pts\"\nground_reflectance = 0.3\n{SITE}"
         ));
         let s = r.unwrap();
-        assert_eq!(s.triangles.len(), 3);
+        assert_eq!(s.input_triangles, 3);
+        // Two-sided by default: one back face per opaque triangle (the window has none).
+        assert_eq!(s.faces, Faces::Both);
+        assert_eq!(s.triangles.len(), 3 + 2);
         assert_eq!(s.materials.len(), 2);
         assert!(s.has_glazing());
-        assert_eq!(s.groups, ["floor", "window"]);
+        assert_eq!(s.groups, ["floor", "window", "floor (back)"]);
         assert_eq!(s.sensors.len(), 2);
         assert_eq!(
             s.site,

@@ -7,7 +7,7 @@
 
 use crate::error::Result;
 use crate::photometry::Rgb;
-use crate::scene::{Material, ModelInput, Scene, Triangle};
+use crate::scene::{Faces, Material, ModelInput, Scene, Triangle};
 use crate::site::Site;
 use glam::{DVec2, DVec3};
 use std::collections::HashMap;
@@ -143,6 +143,7 @@ pub struct SceneBuilder {
     site: Site,
     north_deg: f64,
     ground_reflectance: f64,
+    faces: Faces,
 }
 
 impl Default for SceneBuilder {
@@ -163,6 +164,7 @@ impl SceneBuilder {
             site: Site::default(),
             north_deg: 0.0,
             ground_reflectance: 0.2,
+            faces: Faces::Both,
         }
     }
 
@@ -395,6 +397,10 @@ impl SceneBuilder {
     pub fn set_ground_reflectance(&mut self, rho: f64) {
         self.ground_reflectance = rho;
     }
+    /// Sets which faces of opaque surfaces reflect (default [`Faces::Both`]).
+    pub fn set_faces(&mut self, faces: Faces) {
+        self.faces = faces;
+    }
     /// Triangles added so far.
     pub fn triangle_count(&self) -> usize {
         self.triangles.len()
@@ -420,6 +426,7 @@ impl SceneBuilder {
                 north_deg: self.north_deg,
                 site: self.site,
                 ground_reflectance: self.ground_reflectance,
+                faces: self.faces,
             },
         )
     }
@@ -479,11 +486,11 @@ mod tests {
             let m = b.add_opaque("m", 0.5);
             b.add_rect("g", m, face, 1.0, Rect::new([0.0, 2.0], [0.0, 1.0]));
             let s = b.build("t").unwrap();
-            assert_eq!(s.triangles.len(), 2);
-            for t in &s.triangles {
+            assert_eq!(s.input_triangles, 2);
+            for t in &s.triangles[..2] {
                 assert!((t.normal() - face.normal()).length() < 1e-12, "{face:?}");
             }
-            let area: f64 = s.triangles.iter().map(Triangle::area).sum();
+            let area: f64 = s.triangles[..2].iter().map(Triangle::area).sum();
             assert!((area - 2.0).abs() < 1e-12);
         }
     }
@@ -516,7 +523,7 @@ mod tests {
         let centre = (lo + hi) * 0.5 - s.origin;
         let mut opaque = 0.0;
         let mut glazed = 0.0;
-        for t in &s.triangles {
+        for t in &s.triangles[..s.input_triangles] {
             let n = t.normal();
             if t.material == glass {
                 glazed += t.area();
@@ -546,9 +553,10 @@ mod tests {
             .collect();
         b.add_polygon("hex", m, &hex);
         let s = b.build("t").unwrap();
-        assert_eq!(s.triangles.len(), 4);
-        let area: f64 = s.triangles.iter().map(Triangle::area).sum();
+        assert_eq!(s.input_triangles, 4);
+        let model = &s.triangles[..4];
+        let area: f64 = model.iter().map(Triangle::area).sum();
         assert!((area - 1.5 * 3f64.sqrt()).abs() < 1e-12);
-        assert!(s.triangles.iter().all(|t| t.normal().z > 0.999));
+        assert!(model.iter().all(|t| t.normal().z > 0.999));
     }
 }

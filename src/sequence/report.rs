@@ -72,8 +72,10 @@ pub struct Counts {
     pub ldi_fragments: u64,
     /// Largest LDI (width × height).
     pub ldi_max_size: (u32, u32),
-    /// Input triangles (elements before refinement).
+    /// Faces before refinement: the model's triangles plus their back faces.
     pub elements_before: usize,
+    /// Back faces added for two-sided surfaces (`faces = "both"`, the default).
+    pub back_faces: usize,
     /// Leaves of the refined hierarchy (elements after refinement).
     pub elements_after: usize,
     /// Leaves after the sun's projection alone.

@@ -420,6 +420,7 @@ impl<'a> Engine<'a> {
         report.counts = Counts {
             negligible_sources: s.negligible,
             elements_before: scene.triangles.len(),
+            back_faces: scene.triangles.len() - scene.input_triangles,
             sensors: scene.sensors.len(),
             degenerate_triangles_dropped: scene.dropped_degenerate,
             operators_reused: usize::from(self.operator.is_some() && self.operator_from_cache),
@@ -448,6 +449,11 @@ impl<'a> Engine<'a> {
             report
                 .skipped
                 .push("projections: the scene has no geometry".into());
+        }
+        if self.scene.faces == crate::scene::Faces::Front {
+            report.skipped.push(
+                "back faces: the scene file says faces = \"front\" (back faces are black)".into(),
+            );
         }
     }
 

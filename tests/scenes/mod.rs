@@ -358,7 +358,8 @@ pub fn write_obj(scene: &Scene, dir: &Path, stem: &str) -> Result<()> {
     let mut index: HashMap<[u64; 3], usize> = HashMap::new();
     let mut faces = String::new();
     let mut current: Option<(u32, u32)> = None;
-    for t in &scene.triangles {
+    // The model's own triangles: back faces are made again when the OBJ is loaded.
+    for t in &scene.triangles[..scene.input_triangles] {
         if current != Some((t.group, t.material)) {
             let group = scene
                 .groups
