@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Validation bench: daystep against Radiance on the sample office (scenes/office).
+# Validation bench: daystep against Radiance on the sample office (scenes/office), or on
+# another scene with --scene (tests/bench/radiance/courtyard: outdoor, single-surface walls).
 #
 # Run from anywhere (it changes to the repository root itself):
 #
@@ -7,6 +8,7 @@
 #     tests/bench/radiance/run.sh --quick    # small reference (~8 min): checks the bench, validates nothing
 #     tests/bench/radiance/run.sh --only perez
 #     tests/bench/radiance/run.sh --annual   # adds a year, Radiance 2-phase vs daystep annual (~6 min)
+#     tests/bench/radiance/run.sh --scene tests/bench/radiance/courtyard/scene.toml --only perez --nproc 1
 #
 # It DOWNLOADS pyradiance from PyPI (the first time): a virtual environment is made in
 # target/radiance-venv and `pip install pyradiance` puts the Radiance suite there (the

@@ -1,16 +1,20 @@
 #!/usr/bin/env python3
-"""Validation of daystep against Radiance on the sample office (not part of `cargo test`).
+"""Validation of daystep against Radiance on the sample office or another scene (not part of `cargo test`).
 
 Run it through `tests/bench/radiance/run.sh`, which makes the virtual environment with
 pyradiance (the Radiance binaries and their lib folder come inside its wheel) and builds
 daystep. By hand:
 
     target/radiance-venv/bin/python tests/bench/radiance/validate.py [--quick]
+        [--scene tests/bench/radiance/courtyard/scene.toml] [--only perez] [--nproc 1]
 
 What it does, for each instant (a Perez sky with sun, a CIE overcast sky):
   1. converts the scene (scene.toml, OBJ, MTL, .pts) to Radiance: `Kd` -> plastic,
      `Tf` -> glass (Radiance's transmittance -> transmissivity conversion), `Ke` -> light;
      polygons fan-triangulated as daystep does; `up` and `north_deg` applied as daystep does;
+     plastic reflects from both faces, and every rtrace run states -bv+ (back faces
+     visible, Radiance's default) so that no setting can make single-surface walls
+     one-sided; a trailing `# group` comment on a .pts line names the sensor's group;
   2. makes the sky with gendaylit / gensky (ground glow with the scene's ground reflectance);
   3. runs rtrace -I at the .pts sensors: a converged path-traced reference (no irradiance
      cache), the same at half the samples (to estimate the reference's own noise), a
@@ -18,8 +22,10 @@ What it does, for each instant (a Perez sky with sun, a CIE overcast sky):
      split the reference into sun, sky and interreflected parts;
   4. runs `daystep instant` at --quality draft, default, high, cold (--no-cache);
   5. prints one markdown table per instant: wall time, differences to the reference over
-     sensors above 10 lx, and for daystep its own stated error (lux_err); then the parts
-     (sun, sky, interreflected) and the differences by sensor row.
+     sensors above 10 lx, and for daystep its own stated error (lux_err); a summary line
+     (daystep default's RMS and its coverage, |daystep - reference| <= lux_err, against the
+     target of <= 3 % and >= 90 %) and, when the .pts names groups, the same by group; then
+     the parts (sun, sky, interreflected) and, without groups, the differences by sensor row.
 With --annual, also a year of the bundled weather file: Radiance 2-phase daylight
 coefficients (gendaymtx + rfluxmtx + dctimestep) against `daystep annual`, compared by
 DA300, sDA, UDI and hour by hour.
@@ -142,15 +148,20 @@ def read_obj(path, up, north_deg):
 
 
 def read_pts(path, up, north_deg):
-    out = []
+    """(model point, scene-frame point, scene-frame direction) per sensor, and each
+    sensor's group: the text of a trailing `# …` comment on its line (None without one;
+    daystep skips such comments too, and rtrace is given the numbers only)."""
+    out, groups = [], []
     for raw in path.read_text().splitlines():
-        f = raw.split("#", 1)[0].split()
+        body, _, comment = raw.partition("#")
+        f = body.split()
         if len(f) < 6:
             continue
         p = to_scene_frame(tuple(map(float, f[:3])), up, north_deg)
         d = to_scene_frame(tuple(map(float, f[3:6])), up, north_deg)
         out.append((tuple(map(float, f[:3])), p, d))
-    return out
+        groups.append(comment.strip() or None)
+    return out, groups
 
 
 def radname(name):
@@ -215,13 +226,25 @@ def lux_of_rgb(line):
     return 179.0 * (0.265 * r + 0.670 * g + 0.065 * b)
 
 
+def two_sided(opts):
+    """Radiance's surfaces reflect from both faces when back faces are visible (-bv, on by
+    default; a bare `-bv` toggles it). Every run states -bv+ and no setting may change it:
+    the scenes have single-surface walls lit on their back faces."""
+    if any(o.startswith("-bv") for o in opts.split()):
+        sys.exit(f"Radiance settings must not set -bv (back faces stay visible): {opts}")
+    return "-bv+ " + opts
+
+
 def rtrace(octree, pts_text, opts, env, nproc):
-    cmd = ["rtrace", "-I", "-h", "-w", "-n", str(nproc)] + opts.split() + [str(octree)]
+    cmd = ["rtrace", "-I", "-h", "-w", "-n", str(nproc)] + two_sided(opts).split() + [str(octree)]
     t0 = time.perf_counter()
     out = run(cmd, env, stdin=pts_text)
     secs = time.perf_counter() - t0
+    print(f"  rtrace {opts}: {secs:.1f} s", file=sys.stderr, flush=True)
     vals = [lux_of_rgb(l) for l in out.splitlines() if l.strip()]
-    return vals, secs, " ".join(cmd[:-1]) + " OCTREE < office.pts"
+    if len(vals) != len(pts_text.splitlines()):
+        sys.exit(f"rtrace gave {len(vals)} values for {len(pts_text.splitlines())} sensors")
+    return vals, secs, " ".join(cmd[:-1]) + " OCTREE < sensors.pts"
 
 
 def read_sensors_csv(path):
@@ -251,7 +274,7 @@ def daystep_instant(exe, scene, args, out, quality, env, threads=None):
 # Statistics and printing
 # --------------------------------------------------------------------------------------
 
-def daystep_open_sky(exe, work, site, rho_g, dsargs, env):
+def daystep_open_sky(exe, work, site, rho_g, dsargs, env, threads=None):
     """daystep's sun and sky on an unobstructed horizontal sensor: a scene whose only
     triangle is tiny and far below the sensor."""
     d = work / "open"
@@ -263,7 +286,8 @@ def daystep_open_sky(exe, work, site, rho_g, dsargs, env):
     (d / "scene.toml").write_text(
         f'geometry = "open.obj"\nsensors = "open.pts"\nground_reflectance = {rho_g}\n\n[site]\n'
         + "".join(f"{k} = {v}\n" for k, v in site.items()))
-    rows, _, _, _ = daystep_instant(exe, d / "scene.toml", dsargs, d / "out", "default", env)
+    rows, _, _, _ = daystep_instant(exe, d / "scene.toml", dsargs, d / "out", "default", env,
+                                    threads)
     return rows[0]
 
 
@@ -446,13 +470,68 @@ def annual_study(a, env, exe, scene_path, work, pts_text, rho_g):
     print()
 
 
+# The outdoor bench's target for daystep default (docs/validation.md, "Outdoors").
+TARGET_RMS, TARGET_COVERAGE = 3.0, 90.0
+
+
+def summary(ds, ref, ref_ind, groups, ref_noise):
+    """daystep default against the reference: RMS and coverage (|daystep − reference| ≤
+    lux_err, nothing added for the reference's noise) over sensors above LUX_MIN; by group
+    when the .pts names groups."""
+    def stats(ks, q):
+        rows = ds[q][0]
+        ks = [k for k in ks if ref[k] > LUX_MIN]
+        rel = [(rows[k]["lux"] - ref[k]) / ref[k] for k in ks]
+        cov = sum(1 for k in ks if abs(rows[k]["lux"] - ref[k]) <= rows[k]["lux_err"])
+        cov2 = sum(1 for k in ks if abs(rows[k]["lux"] - ref[k])
+                   <= rows[k]["lux_err"] + 2.0 * ref_noise * ref[k])
+        return {
+            "n": len(ks),
+            "rms": 100 * math.sqrt(sum(d * d for d in rel) / len(ks)),
+            "bias": 100 * sum(rel) / len(ks),
+            "cov": 100 * cov / len(ks),
+            "cov2": 100 * cov2 / len(ks),
+            "ref": statistics.mean(ref[k] for k in ks),
+            "ref_ind": statistics.mean(ref_ind[k] for k in ks),
+            "ds_ind": statistics.mean(rows[k]["lux_indirect"] for k in ks),
+        }
+
+    every = list(range(len(ref)))
+    c = stats(every, "default")
+    ok = c["rms"] <= TARGET_RMS and c["cov"] >= TARGET_COVERAGE
+    print(f"**Summary, daystep default against the converged reference** ({c['n']} sensors "
+          f"above {LUX_MIN:g} lx): RMS {c['rms']:.2f} %, bias {c['bias']:+.2f} %, coverage "
+          f"{c['cov']:.0f} % (|daystep − reference| ≤ lux_err; {c['cov2']:.0f} % with 2σ of the "
+          f"reference's noise added); target ≤ {TARGET_RMS:g} % RMS and ≥ "
+          f"{TARGET_COVERAGE:g} % coverage: {'met' if ok else 'NOT met'}.")
+    print()
+    if not any(groups):
+        return
+    print("By sensor group (the .pts comments; reference and interreflected means in lux, "
+          "differences relative, over sensors above 10 lx):")
+    print()
+    print("| group | sensors | reference | ref. interreflected | default interreflected | "
+          "default bias | default RMS | default coverage | high RMS | high coverage |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for g in list(dict.fromkeys(groups)) + ["all"]:
+        ks = every if g == "all" else [k for k in every if groups[k] == g]
+        if not any(ref[k] > LUX_MIN for k in ks):
+            continue
+        c, h = stats(ks, "default"), stats(ks, "high")
+        print(f"| {g or '(none)'} | {c['n']} | {c['ref']:.0f} | {c['ref_ind']:.0f} | "
+              f"{c['ds_ind']:.0f} | {c['bias']:+.2f} % | {c['rms']:.2f} % | {c['cov']:.0f} % | "
+              f"{h['rms']:.2f} % | {h['cov']:.0f} % |")
+    print()
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--daystep", default=str(REPO / "target/release/daystep"))
     ap.add_argument("--scene", default=str(REPO / "scenes/office/scene.toml"))
-    ap.add_argument("--work", default=str(REPO / "target/radiance-bench"))
+    ap.add_argument("--work", help="scratch folder (default target/radiance-bench for the "
+                    "office, target/radiance-bench/NAME for another scene's folder NAME)")
     ap.add_argument("--nproc", type=int, default=os.cpu_count() or 1,
-                    help="rtrace -n (daystep uses all cores too)")
+                    help="rtrace -n and daystep --threads (default: every core)")
     ap.add_argument("--quick", action="store_true",
                     help="small reference (a smoke test of the bench, not a validation)")
     ap.add_argument("--only", choices=["perez", "overcast"], help="one instant only")
@@ -472,7 +551,12 @@ def main():
     if not exe.exists():
         sys.exit(f"{exe} not found: build daystep first (cargo build --release)")
     scene_path = Path(a.scene).resolve()
-    work = Path(a.work)
+    if a.work:
+        work = Path(a.work)
+    elif scene_path == (REPO / "scenes/office/scene.toml").resolve():
+        work = REPO / "target/radiance-bench"
+    else:
+        work = REPO / "target/radiance-bench" / scene_path.parent.name
     work.mkdir(parents=True, exist_ok=True)
     ref_opts, half_opts = (QUICK_REFERENCE, QUICK_REFERENCE_HALF) if a.quick else (
         REFERENCE, REFERENCE_HALF)
@@ -491,7 +575,7 @@ def main():
     site = sc["site"]
     lat, lon, tz = float(site["latitude"]), float(site["longitude"]), float(site["utc_offset_h"])
     tris, mats = read_obj(scene_path.parent / sc["geometry"], up, north)
-    sensors = read_pts(scene_path.parent / sc["sensors"], up, north)
+    sensors, groups = read_pts(scene_path.parent / sc["sensors"], up, north)
     write_radiance_scene(tris, mats, work / "scene.rad", glazing=a.glazing)
     write_radiance_scene(tris, mats, work / "scene_black.rad", black=True, glazing=a.glazing)
     pts_text = "".join(f"{p[0]:.9g} {p[1]:.9g} {p[2]:.9g} {d[0]:.9g} {d[1]:.9g} {d[2]:.9g}\n"
@@ -500,6 +584,10 @@ def main():
     print(f"scene: {scene_path.relative_to(REPO) if scene_path.is_relative_to(REPO) else scene_path}"
           f", {len(tris)} triangles, {len(sensors)} sensors, up = {up}, north_deg = {north}, "
           f"ground reflectance {rho_g}")
+    if any(groups):
+        print("  sensor groups (trailing `# …` of the .pts lines): " + ", ".join(
+            f"{g} {groups.count(g)}" for g in dict.fromkeys(groups)))
+    print("  Radiance: plastic for every Kd (two-sided: back faces visible, -bv+ on every run)")
     for name, m in sorted(mats.items()):
         if max(m["tf"]) > 0:
             t = [glass_transmissivity(v) for v in m["tf"]]
@@ -551,7 +639,7 @@ def main():
         ds = {}
         for q in qualities:
             rows, secs, report, cmd = daystep_instant(exe, scene_path, dsargs, d / f"daystep-{q}",
-                                                     q, env)
+                                                     q, env, threads=a.nproc)
             ds[q] = (rows, secs, report, cmd)
         rep = ds["default"][2]
         if sun_line:
@@ -559,7 +647,9 @@ def main():
             print(f"sun: Radiance {sun_line[0].split(':', 1)[1].strip()} (altitude, azimuth from "
                   f"south, west +); daystep altitude {s['altitude_deg']:.2f}°, azimuth "
                   f"{s['azimuth_deg'] - 180.0:+.2f}° from south (with refraction)")
-        open_rows = daystep_open_sky(exe, work, site, rho_g, dsargs, env)
+        open_rows = daystep_open_sky(exe, work, site, rho_g, dsargs, env, a.nproc)
+        if len(rows) != len(sensors):
+            sys.exit(f"daystep gave {len(rows)} sensors, the .pts has {len(sensors)}")
         print(f"sky alone, unobstructed horizontal sensor: Radiance sun {e_sun:.0f} lx, sky "
               f"{e_all - e_sun:.0f} lx; daystep sun {open_rows['lux_sun']:.0f} lx, sky "
               f"{open_rows['lux_sky']:.0f} lx ({100 * (open_rows['lux_sky'] / (e_all - e_sun) - 1):+.1f} %)")
@@ -602,23 +692,23 @@ def main():
               f"max {max(ref):.0f}. \"within lux_err\": |daystep − reference| ≤ lux_err + 2σ of "
               "the reference's noise.")
         print()
-
         # Components: sun, sky (+ ground glow) directly, interreflected.
         ref_sky = [t - s for t, s in zip(direct, sun_only)]
         ref_ind = [t - dr for t, dr in zip(ref, direct)]
+        summary(ds, ref, ref_ind, groups, ref_noise)
 
         # Every sensor's values, for a closer look (and the depth profile below).
         cols = ["ref", "ref_half", "ref_sun", "ref_sky", "ref_indirect"] + [
             "radiance_ab5", "radiance_ab2"] + [f"{q}_{c}" for q in qualities for c in (
                 "lux", "lux_err", "lux_sun", "lux_sky", "lux_indirect")]
         with open(d / "compare.csv", "w") as f:
-            f.write("sensor,x,y,z," + ",".join(cols) + "\n")
+            f.write("sensor,x,y,z," + ",".join(cols) + ",group\n")
             for k, (model_p, _, _) in enumerate(sensors):
                 vals = [ref[k], half[k], sun_only[k], ref_sky[k], ref_ind[k]] + [
                     o[1][k] for o in others] + [ds[q][0][k][c] for q in qualities for c in (
                         "lux", "lux_err", "lux_sun", "lux_sky", "lux_indirect")]
                 f.write(f"{k},{model_p[0]:g},{model_p[1]:g},{model_p[2]:g}," +
-                        ",".join(f"{v:.3f}" for v in vals) + "\n")
+                        ",".join(f"{v:.3f}" for v in vals) + f",{groups[k] or ''}\n")
         print("Parts (means over the sensors above 10 lx; Radiance's from direct-only runs with "
               "every opaque surface black):")
         print()
@@ -642,7 +732,7 @@ def main():
         # Depth profile: rows of sensors by distance from the first wall in .pts order
         # (for the office: y, metres from the south window wall).
         ys = sorted({round(p[1], 6) for p, _, _ in sensors})
-        if 2 < len(ys) <= 40:
+        if 2 < len(ys) <= 40 and not any(groups):
             print("By sensor row (model y; means over the row): interreflected lux and "
                   "daystep − reference for the total, relative:")
             print()
@@ -664,7 +754,7 @@ def main():
         print(f"- reference: `{cmd_ref}`")
         print(f"- sun only (black scene): `{cmd_sun}`; sun + sky (black scene): `{cmd_dir}`")
         for (label, o) in RADIANCE_ROWS:
-            print(f"- {label}: `rtrace -I -h -w -n {a.nproc} {o}`")
+            print(f"- {label}: `rtrace -I -h -w -n {a.nproc} {two_sided(o)}`")
         print(f"- daystep: `{' '.join(map(str, ds['default'][3]))}` (and draft, high)")
         print()
     if a.annual:
