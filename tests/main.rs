@@ -9,6 +9,7 @@ mod cache_runs; // the cache in whole runs: warm = cold, Kd/site/weather hit, ve
 mod coincident; // coincident faces: floor on ground, desk on floor, walls back to back
 mod cli; // the binary end to end: exit codes, messages naming file:line, outputs
 mod df; // daylight factor: 100 % in the open, the vertical formula, roof-opening sky component, CLI
+mod extent; // site context of any size: the office on a 1 km ground and in a ring of blocks
 mod extremes; // low sun, polar day and night, turbidity limits, slivers, far coordinates
 mod generated_scenes; // the generated office and building: areas, normals, closure, triangle target, bundled files
 mod layers; // the layer rule of lib.rs: lower layers never import higher ones

@@ -48,14 +48,16 @@ pub fn projection_params_bytes(p: &ProjectionParams) -> Vec<u8> {
         min_area_m2,
         partial_area_m2,
         max_depth,
+        margin_m,
     } = *p;
-    let mut out = Vec::with_capacity(52);
+    let mut out = Vec::with_capacity(60);
     out.extend_from_slice(&max_resolution.to_le_bytes());
     out.extend_from_slice(&min_resolution.to_le_bytes());
     for x in [v_min, v_max, min_area_m2, partial_area_m2] {
         out.extend_from_slice(&x.to_bits().to_le_bytes());
     }
     out.extend_from_slice(&max_depth.to_le_bytes());
+    out.extend_from_slice(&margin_m.to_bits().to_le_bytes());
     out
 }
 

@@ -120,6 +120,19 @@ impl Ldi {
         })
     }
 
+    /// An LDI over the projection of the box `window` only, `resolution` pixels along the
+    /// longer side of that projection.
+    pub fn build_region(
+        scene: &ProjectionScene,
+        dir: DVec3,
+        resolution: u32,
+        window: (DVec3, DVec3),
+    ) -> Ldi {
+        Ldi::build_sized(scene, dir, Some(window), DVec2::ZERO, |ext| {
+            ext.max_element() / resolution.max(1) as f64
+        })
+    }
+
     /// As [`Ldi::build`] with a fixed pixel edge of `pixel_m` metres whatever the
     /// direction: every bundle then has the same line density (lines per m² across the
     /// bundle), which global-line estimates need.
@@ -339,6 +352,8 @@ mod tests {
             vertices: tris.into_iter().map(|(v, _)| v).collect(),
             materials,
             twin: Vec::new(),
+            bounds: (DVec3::splat(-1e9), DVec3::splat(1e9)),
+            windows: Vec::new(),
         }
     }
 

@@ -40,7 +40,13 @@ pub struct ProjectionParams {
     pub partial_area_m2: f64,
     /// Deepest refinement below an input triangle.
     pub max_depth: u32,
+    /// Margin (m) around the sensors' bounding box of the region of interest
+    /// ([`Scene::region_of_interest`]): a scene much larger than it is projected in nested
+    /// windows ([`crate::scene::context_windows`], [`project`]).
+    pub margin_m: f64,
 }
+
+pub use crate::scene::CONTEXT_DIAMETERS;
 
 impl Default for ProjectionParams {
     fn default() -> Self {
@@ -55,6 +61,8 @@ impl Default for ProjectionParams {
             min_area_m2: 1e-3,
             partial_area_m2: 0.25,
             max_depth: 10,
+            // As the interreflection's region (`TransportParams::margin_m`).
+            margin_m: 6.0,
         }
     }
 }
@@ -131,13 +139,28 @@ pub struct ProjectionScene {
     /// Opposite face of each triangle (`u32::MAX`: none), as [`Scene::twin`]; empty when
     /// no triangle has one. A back face is rasterised with its front triangle.
     pub twin: Vec<u32>,
+    /// Bounds of all triangles (min, max; scene frame, m).
+    pub bounds: (DVec3, DVec3),
+    /// Nested windows from the region of interest out to the whole scene
+    /// ([`crate::scene::context_windows`]); just the bounds for a scene projected whole.
+    pub windows: Vec<(DVec3, DVec3)>,
 }
 
 impl ProjectionScene {
-    /// Extracts what projection needs from a scene.
+    /// Extracts what projection needs from a scene, with the nested windows around the
+    /// region of interest of its sensors ([`Scene::region_of_interest`] with `margin_m`).
+    pub fn with_region(scene: &Scene, margin_m: f64) -> Self {
+        let mut p = ProjectionScene::new(scene);
+        p.windows = crate::scene::context_windows(scene.region_of_interest(margin_m), p.bounds);
+        p
+    }
+
+    /// Extracts what projection needs from a scene (the whole scene at one resolution).
     pub fn new(scene: &Scene) -> Self {
         let t = &scene.triangles;
         ProjectionScene {
+            bounds: scene.bounds(),
+            windows: vec![scene.bounds()],
             vertices: t.iter().map(|t| t.v).collect(),
             normals: t.iter().map(|t| t.normal()).collect(),
             areas: t.iter().map(|t| t.area()).collect(),
@@ -177,17 +200,30 @@ impl ProjectionScene {
 
 /// Projects the scene along `dir` (unit, towards the source) at `resolution`, refines the
 /// hierarchy by visibility ratio and returns the record.
+///
+/// A scene with nested windows ([`ProjectionScene::with_region`]) gets one LDI per window:
+/// the first at `resolution` pixels across its projection, each further one at twice the
+/// pixel of the one inside it. An element is refined against the LDI of the smallest
+/// window holding it, so the room keeps its resolution whatever the site's extent and
+/// the far context is still lit.
 pub fn project(
     scene: &ProjectionScene,
     dir: DVec3,
     resolution: u32,
     params: &ProjectionParams,
 ) -> DirectionRecord {
-    let ldi = Ldi::build(scene, dir, resolution);
-    let mut record = refine_all(scene, &ldi, params);
-    record.stats.width = ldi.camera.width;
-    record.stats.height = ldi.camera.height;
-    record.stats.pixel_m = ldi.camera.pixel;
-    record.stats.fragments = ldi.fragment_count() as u64;
+    let mut record = if scene.windows.len() <= 1 {
+        refine_all(scene, &[Ldi::build(scene, dir, resolution)], &[], params)
+    } else {
+        let first = Ldi::build_region(scene, dir, resolution, scene.windows[0]);
+        let pixel = first.camera.pixel;
+        let mut ldis = vec![first];
+        for (k, w) in scene.windows.iter().enumerate().skip(1) {
+            let p = pixel * (1u64 << k) as f64;
+            ldis.push(Ldi::build_window(scene, dir, p, *w, glam::DVec2::ZERO));
+        }
+        refine_all(scene, &ldis, &scene.windows, params)
+    };
+    record.stats.lit_leaves = record.leaves.len() as u64;
     record
 }

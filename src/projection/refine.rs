@@ -55,27 +55,48 @@ fn point_transmission(ldi: &Ldi, tri: u32, v: &[DVec3; 3]) -> Rgb {
     ldi.transmission_at(i, j, cam.height_of(c), tri)
 }
 
+/// The LDIs of one direction, one per window ([`crate::scene::context_windows`]; one LDI
+/// of the whole scene and no windows when it is projected whole).
+#[derive(Clone, Copy)]
+struct Views<'a> {
+    ldis: &'a [Ldi],
+    windows: &'a [(DVec3, DVec3)],
+}
+
+impl Views<'_> {
+    /// The LDI an element with vertices `v` is refined against: that of the smallest
+    /// window holding it (so its whole projection is in that image).
+    fn for_element(&self, v: &[DVec3; 3]) -> &Ldi {
+        if self.windows.is_empty() {
+            &self.ldis[0]
+        } else {
+            &self.ldis[crate::scene::window_of(self.windows, v)]
+        }
+    }
+}
+
 /// Refines one input triangle; pushes its lit leaves. Returns (tested, split).
 fn refine_triangle(
     scene: &ProjectionScene,
-    ldi: &Ldi,
+    views: Views,
     params: &ProjectionParams,
     tri: u32,
     out: &mut Vec<LeafWeight>,
 ) -> (u64, u64) {
-    let dir = ldi.camera.dir;
+    let dir = views.ldis[0].camera.dir;
     let cos = scene.normals[tri as usize].dot(dir);
     if cos <= 0.0 || cos.is_nan() {
         return (0, 0); // faces away: receives nothing from this source
     }
     let glazing = scene.glazing_tf[tri as usize].max_element() > 0.0;
-    let pixel_area = ldi.camera.pixel * ldi.camera.pixel;
     let max_depth = params.max_depth.min(MAX_DEPTH);
     let (mut tested, mut splits) = (0, 0);
     let mut stack = vec![(ElementKey::root(tri), scene.vertices[tri as usize])];
     while let Some((key, v)) = stack.pop() {
         tested += 1;
         let area = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
+        let ldi = views.for_element(&v);
+        let pixel_area = ldi.camera.pixel * ldi.camera.pixel;
         let c = coverage(ldi, tri, &v);
         let t_mean = if c.n_p == 0 {
             point_transmission(ldi, tri, &v)
@@ -106,18 +127,23 @@ fn refine_triangle(
     (tested, splits)
 }
 
-/// Refines every input triangle against `ldi` and returns the lit leaves in key order.
+/// Refines every input triangle and returns the lit leaves in key order: against `ldis[0]`
+/// when `windows` is empty, else each element against the LDI of the smallest of `windows`
+/// holding it (`ldis[k]` covers `windows[k]`). The record's image counters are those of
+/// `ldis[0]`; its fragments count all of them.
 pub fn refine_all(
     scene: &ProjectionScene,
-    ldi: &Ldi,
+    ldis: &[Ldi],
+    windows: &[(DVec3, DVec3)],
     params: &ProjectionParams,
 ) -> DirectionRecord {
+    let views = Views { ldis, windows };
     let parts: Vec<(Vec<LeafWeight>, u64, u64)> = (0..scene.vertices.len() as u32)
         .into_par_iter()
         .with_min_len(64)
         .map(|tri| {
             let mut leaves = Vec::new();
-            let (t, s) = refine_triangle(scene, ldi, params, tri, &mut leaves);
+            let (t, s) = refine_triangle(scene, views, params, tri, &mut leaves);
             (leaves, t, s)
         })
         .collect();
@@ -129,5 +155,10 @@ pub fn refine_all(
         record.stats.elements_split += s;
     }
     record.stats.lit_leaves = record.leaves.len() as u64;
+    let cam = &ldis[0].camera;
+    record.stats.width = cam.width;
+    record.stats.height = cam.height;
+    record.stats.pixel_m = cam.pixel;
+    record.stats.fragments = ldis.iter().map(|l| l.fragment_count() as u64).sum();
     record
 }

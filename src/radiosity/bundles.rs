@@ -18,6 +18,15 @@ const FIX: f64 = 65536.0;
 
 /// One operator from `n_dirs` bundles: counts of lines per row and fixed-point
 /// transmission sums per (row, row) pair, normalised to F̂.
+///
+/// A scene that fits the first of the nested windows around the mesh's region
+/// ([`crate::scene::context_windows`]) gets one pass of lines at `resolution` pixels across
+/// its diameter. A larger one gets a pass per window, with the same directions: the first
+/// at `resolution` pixels across that window's diameter, each further one at twice the
+/// spacing of the one inside it, and each estimating the rows whose smallest window it
+/// is (far context still reflects into the room, at a line spacing that grows with its
+/// distance like its elements). Each row's estimate comes from the lines of one pass, all
+/// of which cross it completely, so it stays unbiased.
 pub(super) fn operator(
     pscene: &ProjectionScene,
     tracer: &Tracer,
@@ -27,10 +36,6 @@ pub(super) fn operator(
     seed: u64,
 ) -> (Sparse, u64) {
     let rows = mesh.elements.len();
-    // One pixel size for every direction (uniform line density): the bounding sphere's
-    // diameter over `resolution`, or the elements' line-spacing floor where that is coarser.
-    // Lines cover the whole scene: every element receives, so every element's line count
-    // must be complete.
     let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
     for t in &pscene.vertices {
         for p in t {
@@ -38,16 +43,44 @@ pub(super) fn operator(
             hi = hi.max(*p);
         }
     }
-    let diameter = if lo.is_finite() {
-        (hi - lo).length()
-    } else {
-        1.0
+    let diameter = |b: (DVec3, DVec3)| {
+        let d = (b.1 - b.0).length();
+        if d.is_finite() {
+            d.max(1e-9)
+        } else {
+            1.0
+        }
     };
+    let whole = (lo, hi);
+    let res = resolution.max(1) as f64;
     // Work sized to the scene: no finer than the elements need.
-    let pixel = (diameter.max(1e-9) / resolution.max(1) as f64).max(mesh.line_spacing_floor());
-    let opaque: Vec<bool> = (0..pscene.vertices.len())
-        .map(|t| pscene.glazing_tf[t].max_element() <= 0.0)
-        .collect();
+    let floor = mesh.line_spacing_floor();
+    let windows = crate::scene::context_windows(mesh.region, whole);
+    let passes: Vec<Pass> = if windows.len() <= 1 {
+        vec![Pass {
+            window: whole,
+            pixel: (diameter(whole) / res).max(floor),
+            rows: None,
+        }]
+    } else {
+        let of_row: Vec<usize> = mesh
+            .elements
+            .iter()
+            .map(|&e| {
+                crate::scene::window_of(&windows, &mesh.hierarchy.elements[e as usize].vertices)
+            })
+            .collect();
+        let pixel = (diameter(windows[0]) / res).max(floor);
+        windows
+            .iter()
+            .enumerate()
+            .map(|(k, w)| Pass {
+                window: *w,
+                pixel: pixel * (1u64 << k) as f64,
+                rows: Some(of_row.iter().map(|&x| x == k).collect()),
+            })
+            .collect()
+    };
     // Each direction: (pair key, fixed-point τ) sorted and merged, plus line counts.
     let per_dir: Vec<DirectionLines> = (0..n_dirs)
         .into_par_iter()
@@ -57,71 +90,19 @@ pub(super) fn operator(
                 uniform(seed, 13, 2 * m as u64),
                 uniform(seed, 13, 2 * m as u64 + 1),
             );
-            let ldi = Ldi::build_window(pscene, d, pixel, (lo, hi), jitter);
-            let cam = ldi.camera;
-            let pass: Vec<Rgb> = (0..pscene.vertices.len())
-                .map(|t| pscene.pass_factor(t, d))
-                .collect();
             let mut pairs: Vec<(u64, [u64; 3])> = Vec::new();
             let mut counts = vec![0u32; rows];
-            let mut panes: Vec<Fragment> = Vec::new();
-            let mirror = Mirror {
-                pscene,
-                tracer,
-                mesh,
-            };
-            for j in 0..cam.height {
-                for i in 0..cam.width {
-                    let list = ldi.pixel(i, j);
-                    if list.is_empty() {
-                        continue;
-                    }
-                    let x = cam.origin.x + (i as f64 + 0.5) * cam.pixel;
-                    let y = cam.origin.y + (j as f64 + 0.5) * cam.pixel;
-                    let base = cam.u * x + cam.v * y;
-                    // (row, faces the source side) of the last opaque fragment, τ since.
-                    let mut prev: Option<(u32, bool)> = None;
-                    let mut tau = Rgb::ONE;
-                    // Glazing fragments since the last opaque one (triangle, height).
-                    panes.clear();
-                    for fr in list {
-                        let t = fr.tri as usize;
-                        if !opaque[t] {
-                            // Light from the opaque fragment above (facing down, towards
-                            // this pane) reflected back up to it.
-                            if let Some((pr, false)) = prev {
-                                mirror.link(pr, fr, base, d, tau, &mut pairs);
-                            }
-                            tau *= pass[t];
-                            panes.push(*fr);
-                            continue;
-                        }
-                        let p = base + d * fr.height as f64;
-                        let bary = barycentric(pscene.vertices[t], p);
-                        let row = mesh.row_at(fr.tri, bary);
-                        let up = pscene.normals[t].dot(d) > 0.0;
-                        counts[row as usize] += 1;
-                        if up {
-                            // Light reflected down to this fragment by each pane above it
-                            // (up to the previous opaque one), through the panes between.
-                            let mut between = Rgb::ONE;
-                            for g in panes.iter().rev() {
-                                mirror.link(row, g, base, -d, between, &mut pairs);
-                                between *= pass[g.tri as usize];
-                            }
-                        }
-                        panes.clear();
-                        if let Some((pr, p_up)) = prev {
-                            if !p_up && up && tau != Rgb::ZERO {
-                                let q = fixed(tau);
-                                pairs.push(((row as u64) << 32 | pr as u64, q));
-                                pairs.push(((pr as u64) << 32 | row as u64, q));
-                            }
-                        }
-                        prev = Some((row, up));
-                        tau = Rgb::ONE;
-                    }
-                }
+            for pass in &passes {
+                bundle(
+                    pscene,
+                    tracer,
+                    mesh,
+                    pass,
+                    d,
+                    jitter,
+                    &mut pairs,
+                    &mut counts,
+                );
             }
             (merge_pairs(pairs), counts)
         })
@@ -142,6 +123,121 @@ pub(super) fn operator(
         (r, c, q.map(|x| (x as f64 * inv) as f32))
     });
     (Sparse::from_sorted(rows, entries), lines)
+}
+
+/// One pass of a bundle: the window its LDI covers (scene frame, m), its pixel (line
+/// spacing, m) and the rows it estimates (`None`: all).
+struct Pass {
+    window: (DVec3, DVec3),
+    pixel: f64,
+    rows: Option<Vec<bool>>,
+}
+
+impl Pass {
+    fn serves(&self, row: u32) -> bool {
+        self.rows.as_ref().is_none_or(|r| r[row as usize])
+    }
+}
+
+/// The lines of one bundle direction `d` in one pass: per opaque fragment a line count for
+/// its row, per pair of consecutive faces that face each other a link each way, and the
+/// glazing mirror's one-way links; only for the rows the pass serves (as receivers).
+#[allow(clippy::too_many_arguments)]
+fn bundle(
+    pscene: &ProjectionScene,
+    tracer: &Tracer,
+    mesh: &Mesh,
+    pass: &Pass,
+    d: DVec3,
+    jitter: glam::DVec2,
+    pairs: &mut Vec<(u64, [u64; 3])>,
+    counts: &mut [u32],
+) {
+    let ldi = Ldi::build_window(pscene, d, pass.pixel, pass.window, jitter);
+    let cam = ldi.camera;
+    let pass_factor: Vec<Rgb> = (0..pscene.vertices.len())
+        .map(|t| pscene.pass_factor(t, d))
+        .collect();
+    let opaque = |t: usize| pscene.glazing_tf[t].max_element() <= 0.0;
+    let mut panes: Vec<Fragment> = Vec::new();
+    let mirror = Mirror {
+        pscene,
+        tracer,
+        mesh,
+    };
+    // Links whose receiver this pass does not serve are dropped here.
+    let mut local: Vec<(u64, [u64; 3])> = Vec::new();
+    for j in 0..cam.height {
+        for i in 0..cam.width {
+            let list = ldi.pixel(i, j);
+            if list.is_empty() {
+                continue;
+            }
+            let x = cam.origin.x + (i as f64 + 0.5) * cam.pixel;
+            let y = cam.origin.y + (j as f64 + 0.5) * cam.pixel;
+            let base = cam.u * x + cam.v * y;
+            // (row, faces the source side) of the last opaque fragment, τ since.
+            let mut prev: Option<(u32, bool)> = None;
+            let mut tau = Rgb::ONE;
+            // Glazing fragments since the last opaque one (triangle, height).
+            panes.clear();
+            // A back face's row, from its front's just before it (same point, mirrored
+            // quadtree path): saves the descent.
+            let mut last: Option<(u32, u32)> = None;
+            for fr in list {
+                let t = fr.tri as usize;
+                if !opaque(t) {
+                    // Light from the opaque fragment above (facing down, towards
+                    // this pane) reflected back up to it.
+                    if let Some((pr, false)) = prev {
+                        mirror.link(pr, fr, base, d, tau, &mut local);
+                    }
+                    tau *= pass_factor[t];
+                    panes.push(*fr);
+                    continue;
+                }
+                let twin = match last {
+                    Some((lt, lr)) if pscene.twin.get(t).is_some_and(|&w| w == lt) => {
+                        mesh.twin_row(lr)
+                    }
+                    _ => None,
+                };
+                let row = twin.unwrap_or_else(|| {
+                    let p = base + d * fr.height as f64;
+                    mesh.row_at(fr.tri, barycentric(pscene.vertices[t], p))
+                });
+                last = Some((fr.tri, row));
+                let up = pscene.normals[t].dot(d) > 0.0;
+                if pass.serves(row) {
+                    counts[row as usize] += 1;
+                }
+                if up {
+                    // Light reflected down to this fragment by each pane above it
+                    // (up to the previous opaque one), through the panes between.
+                    let mut between = Rgb::ONE;
+                    for g in panes.iter().rev() {
+                        mirror.link(row, g, base, -d, between, &mut local);
+                        between *= pass_factor[g.tri as usize];
+                    }
+                }
+                panes.clear();
+                if let Some((pr, p_up)) = prev {
+                    if !p_up && up && tau != Rgb::ZERO {
+                        let q = fixed(tau);
+                        local.push(((row as u64) << 32 | pr as u64, q));
+                        local.push(((pr as u64) << 32 | row as u64, q));
+                    }
+                }
+                prev = Some((row, up));
+                tau = Rgb::ONE;
+            }
+        }
+    }
+    pairs.extend(
+        local
+            .into_iter()
+            .filter(|(k, _)| pass.serves((k >> 32) as u32)),
+    );
 }
 
 /// Fixed-point value of a transmission (or reflection) factor.

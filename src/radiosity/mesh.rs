@@ -7,6 +7,7 @@ use super::child_of;
 use crate::hierarchy::{ElementKey, Hierarchy, MAX_DEPTH};
 use crate::photometry::Rgb;
 use crate::scene::Scene;
+use crate::trace::barycentric;
 use glam::DVec3;
 
 /// The fixed mesh: leaves of a uniformly refined hierarchy, one unknown each.
@@ -28,6 +29,10 @@ pub struct Mesh {
     pub region: (DVec3, DVec3),
     /// Largest element inside the region of interest, m² (what `Mesh::new` was given).
     pub max_area: f64,
+    /// The row of the same element on the opposite face (a back face's and its front's,
+    /// both ways), `u32::MAX` where there is none. Both faces are split alike, so their
+    /// leaves pair up exactly.
+    twin_row: Vec<u32>,
 }
 
 /// Largest far element (outside the region of interest) per squared distance from the
@@ -123,7 +128,24 @@ impl Mesh {
                 *coarse_id.entry(c).or_insert(n)
             })
             .collect();
+        let mut twin_row = vec![u32::MAX; elements.len()];
+        for (r, &e) in elements.iter().enumerate() {
+            let el = &h.elements[e as usize];
+            let tri = el.key.tri as usize;
+            match scene.twin.get(tri) {
+                // From each back face (after its front) to its front's leaf at its centre.
+                Some(&f) if f != u32::MAX && (f as usize) < tri => {
+                    let c = (el.vertices[0] + el.vertices[1] + el.vertices[2]) / 3.0;
+                    let b = barycentric(scene.triangles[f as usize].v, c);
+                    let fr = descend(&h, &row_of, f, b);
+                    twin_row[r] = fr;
+                    twin_row[fr as usize] = r as u32;
+                }
+                _ => {}
+            }
+        }
         Mesh {
+            twin_row,
             region,
             max_area,
             coarse_rows: coarse_id.len(),
@@ -137,12 +159,15 @@ impl Mesh {
 
     /// Row containing the point with barycentrics `bary` on input triangle `tri`.
     pub fn row_at(&self, tri: u32, bary: [f64; 3]) -> u32 {
-        let mut i = tri;
-        let mut b = bary;
-        while let Some(fc) = self.hierarchy.elements[i as usize].first_child {
-            i = fc + child_of(&mut b) as u32;
-        }
-        self.row_of[i as usize]
+        descend(&self.hierarchy, &self.row_of, tri, bary)
+    }
+
+    /// The row of the same element on the opposite face of `row`'s triangle, if it has one.
+    pub fn twin_row(&self, row: u32) -> Option<u32> {
+        self.twin_row
+            .get(row as usize)
+            .copied()
+            .filter(|&r| r != u32::MAX)
     }
 
     /// Area-weighted mean of `value` (per element of `h`, leaf totals as
@@ -183,6 +208,16 @@ impl Mesh {
             })
             .collect()
     }
+}
+
+/// The leaf row of `h` under triangle `tri` containing barycentrics `bary`.
+fn descend(h: &Hierarchy, row_of: &[u32], tri: u32, bary: [f64; 3]) -> u32 {
+    let mut i = tri;
+    let mut b = bary;
+    while let Some(fc) = h.elements[i as usize].first_child {
+        i = fc + child_of(&mut b) as u32;
+    }
+    row_of[i as usize]
 }
 
 #[cfg(test)]

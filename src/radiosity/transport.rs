@@ -178,17 +178,7 @@ impl Transport {
     /// The mesh and per-row materials of `scene` for `params` (deterministic: the same
     /// inputs give the same rows, which cached operators rely on).
     fn setup(scene: &Scene, sensors: &[Sensor], params: &TransportParams) -> Transport {
-        let (lo, hi) = scene.bounds();
-        let region = if sensors.is_empty() || scene.triangles.is_empty() {
-            (lo, hi)
-        } else {
-            let m = DVec3::splat(params.margin_m.max(0.0));
-            let (a, b) = sensors.iter().fold(
-                (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-                |(a, b), s| (a.min(s.position), b.max(s.position)),
-            );
-            ((a - m).max(lo), (b + m).min(hi))
-        };
+        let region = crate::scene::region_around(sensors, scene.bounds(), params.margin_m);
         // Bound the unknowns (memory and time grow with rows × links): a large region
         // gets coarser elements. Only the part of each triangle inside the region counts: a
         // site's ground plane or a large emitter crossing it must not coarsen the room.

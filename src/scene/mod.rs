@@ -116,6 +116,14 @@ impl Scene {
             .any(|w| w.contains(scene_file::NO_SITE_WARNING))
     }
 
+    /// The region of interest: the sensors' bounding box grown by `margin_m` on every side,
+    /// clipped to the geometry's bounds (scene frame, m). The whole bounds when there are no
+    /// sensors. Projections and the interreflection resolve it finely, whatever the
+    /// extent of the site around it.
+    pub fn region_of_interest(&self, margin_m: f64) -> (DVec3, DVec3) {
+        region_around(&self.sensors, self.bounds(), margin_m)
+    }
+
     /// Axis-aligned bounds of all triangles (scene frame): (min, max).
     pub fn bounds(&self) -> (DVec3, DVec3) {
         let mut lo = DVec3::splat(f64::INFINITY);
@@ -128,6 +136,67 @@ impl Scene {
         }
         (lo, hi)
     }
+}
+
+/// The bounding box of `sensors` grown by `margin_m`, clipped to `bounds` (min, max; scene
+/// frame, m); `bounds` itself when there are no sensors or no geometry.
+pub fn region_around(sensors: &[Sensor], bounds: (DVec3, DVec3), margin_m: f64) -> (DVec3, DVec3) {
+    let (lo, hi) = bounds;
+    if sensors.is_empty() || !lo.is_finite() || !hi.is_finite() {
+        return bounds;
+    }
+    let m = DVec3::splat(margin_m.max(0.0));
+    let (a, b) = sensors.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(a, b), s| (a.min(s.position), b.max(s.position)),
+    );
+    ((a - m).max(lo), (b + m).min(hi))
+}
+
+/// How much larger than the region of interest (by diameter) a scene may be before the
+/// projections and the interreflection's lines resolve the region separately: the first
+/// [`context_windows`] window is the region grown this many times. The presets were
+/// calibrated on the sample office, whose scene is 3.2 region diameters across; a site of
+/// any extent beyond that no longer coarsens the room (issue 13).
+pub const CONTEXT_DIAMETERS: f64 = 4.0;
+
+/// Nested boxes (min, max; scene frame, m) from the region of interest out to the whole
+/// scene: the cube around the region's centre whose half-edge is [`CONTEXT_DIAMETERS`]
+/// times the region's largest half-extent, then doubled
+/// each time, each clipped to `bounds`, the last one `bounds` itself. One box when the
+/// first already holds the whole scene. A projection or a set of lines covers box k at
+/// 2^k times the pixel of box 0, and an element is resolved in the smallest box holding
+/// it: far context costs a few coarse images, its elements grow with their distance too.
+pub fn context_windows(region: (DVec3, DVec3), bounds: (DVec3, DVec3)) -> Vec<(DVec3, DVec3)> {
+    let inside =
+        |a: (DVec3, DVec3), b: (DVec3, DVec3)| a.0.cmpge(b.0).all() && a.1.cmple(b.1).all();
+    if !(region.0.is_finite() && region.1.is_finite()) || !inside(region, bounds) {
+        return vec![bounds];
+    }
+    // Cubes: a flat region (sensors in one plane, clipped to a flat site) still grows in
+    // every direction.
+    let c = (region.0 + region.1) * 0.5;
+    let mut half =
+        DVec3::splat(((region.1 - region.0) * 0.5).max_element().max(1e-3)) * CONTEXT_DIAMETERS;
+    let mut out = Vec::new();
+    loop {
+        let w = ((c - half).max(bounds.0), (c + half).min(bounds.1));
+        if inside(bounds, w) || out.len() >= 24 {
+            out.push(bounds);
+            return out;
+        }
+        out.push(w);
+        half *= 2.0;
+    }
+}
+
+/// Index of the smallest of `windows` ([`context_windows`]) holding the triangle `v`.
+pub fn window_of(windows: &[(DVec3, DVec3)], v: &[DVec3; 3]) -> usize {
+    let (a, b) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
+    windows
+        .iter()
+        .position(|w| a.cmpge(w.0).all() && b.cmple(w.1).all())
+        .unwrap_or(windows.len().saturating_sub(1))
 }
 
 /// Geometry in the model frame (Z up, +Y = model north, metres), before conversion.

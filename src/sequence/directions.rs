@@ -106,7 +106,8 @@ impl<'a> Directions<'a> {
         extra.extend_from_slice(&s.sample_angle_deg.to_bits().to_le_bytes());
         Directions {
             scene,
-            pscene: project.then(|| ProjectionScene::new(scene)),
+            pscene: project
+                .then(|| ProjectionScene::with_region(scene, quality.projection.margin_m)),
             vis: tracer,
             store,
             hash: cache::scene_hash(scene, &quality.projection, &extra),

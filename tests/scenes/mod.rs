@@ -56,6 +56,25 @@ fn add_office_palette(b: &mut SceneBuilder) -> [u32; 5] {
 
 /// The bundled sample scene as a builder (see [`side_lit_office`]).
 pub fn side_lit_office_builder() -> SceneBuilder {
+    office_on_site(OfficeSite::Sample)
+}
+
+/// The site around the sample office: its own 60 m ground, the same office on a 1 km ×
+/// 1 km ground, or on its 60 m ground inside a ring of context blocks 200–400 m away
+/// (issue 13: the room's results must not depend on the site's extent).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OfficeSite {
+    /// 60 m × 60 m ground (the bundled sample).
+    Sample,
+    /// 1 km × 1 km ground centred on the room.
+    KilometreGround,
+    /// The sample's ground plus twelve 30 m tall blocks, 40 m × 40 m, whose centres lie
+    /// 200, 300 and 400 m from the room in turn, every 30°.
+    ContextRing,
+}
+
+/// The sample office on `site` (see [`OfficeSite`]).
+pub fn office_on_site(site: OfficeSite) -> SceneBuilder {
     let mut b = SceneBuilder::new();
     let [floor, wall, ceiling, exterior, ground] = add_office_palette(&mut b);
     let obstruction = b.add_opaque("obstruction", 0.3);
@@ -117,12 +136,34 @@ pub fn side_lit_office_builder() -> SceneBuilder {
     b.add_shell("obstruction", blo, bhi, false, m, &[]);
     // Ground at the floor's level, 60 m × 60 m around the room, with the building's and the
     // obstruction's footprints cut out so nothing overlaps.
+    let ground_rect = match site {
+        OfficeSite::KilometreGround => Rect::new([-497.0, 503.0], [-496.0, 504.0]),
+        _ => Rect::new([-27.0, 33.0], [-26.0, 34.0]),
+    };
+    if site == OfficeSite::ContextRing {
+        let block = b.add_opaque("context", 0.3);
+        for k in 0..12 {
+            let a = (k as f64 * 30.0).to_radians();
+            let r = 200.0 + 100.0 * (k % 3) as f64;
+            let c = DVec3::new(3.0 + r * a.cos(), 4.0 + r * a.sin(), 0.0);
+            let mut m = [Some(block); 6];
+            m[Face::Bottom as usize] = None;
+            b.add_shell(
+                "context",
+                c - DVec3::new(20.0, 20.0, 0.0),
+                c + DVec3::new(20.0, 20.0, 30.0),
+                false,
+                m,
+                &[],
+            );
+        }
+    }
     b.add_rect_with_holes(
         "ground",
         ground,
         Face::Top,
         0.0,
-        Rect::new([-27.0, 33.0], [-26.0, 34.0]),
+        ground_rect,
         &[
             Rect::new([olo.x, ohi.x], [olo.y, ohi.y]),
             Rect::new([blo.x, bhi.x], [blo.y, bhi.y]),
