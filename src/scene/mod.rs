@@ -170,7 +170,7 @@ pub const CONTEXT_DIAMETERS: f64 = 4.0;
 pub fn context_windows(region: (DVec3, DVec3), bounds: (DVec3, DVec3)) -> Vec<(DVec3, DVec3)> {
     let inside =
         |a: (DVec3, DVec3), b: (DVec3, DVec3)| a.0.cmpge(b.0).all() && a.1.cmple(b.1).all();
-    if !(region.0.is_finite() && region.1.is_finite()) || !inside(region, bounds) {
+    if !(region.0.is_finite() && region.1.is_finite() && inside(region, bounds)) {
         return vec![bounds];
     }
     // Cubes: a flat region (sensors in one plane, clipped to a flat site) still grows in
