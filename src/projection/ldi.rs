@@ -121,15 +121,23 @@ impl Ldi {
     }
 
     /// An LDI over the projection of the box `window` only, `resolution` pixels along the
-    /// longer side of that projection.
+    /// longer side of that projection (its pixel no finer than `floor_m` metres).
     pub fn build_region(
         scene: &ProjectionScene,
         dir: DVec3,
         resolution: u32,
         window: (DVec3, DVec3),
+        floor_m: f64,
     ) -> Ldi {
         Ldi::build_sized(scene, dir, Some(window), DVec2::ZERO, |ext| {
-            ext.max_element() / resolution.max(1) as f64
+            (ext.max_element() / resolution.max(1) as f64).max(floor_m)
+        })
+    }
+
+    /// As [`Ldi::build`], its pixel no finer than `floor_m` metres.
+    pub fn build_floored(scene: &ProjectionScene, dir: DVec3, resolution: u32, floor_m: f64) -> Ldi {
+        Ldi::build_sized(scene, dir, None, DVec2::ZERO, |ext| {
+            (ext.max_element() / resolution.max(1) as f64).max(floor_m)
         })
     }
 
