@@ -16,4 +16,5 @@ mod layers; // the layer rule of lib.rs: lower layers never import higher ones
 mod parsers; // every parser under arbitrary and mutated input: no panic, hang or unbounded allocation
 mod physics; // closed-form daylight: unobstructed skies, roof opening, thin sky band, sun footprint, glazing
 mod transport; // global-line transport: furnace, configuration factor, closed rooms (exact enclosure), strata, warm = cold, threads
+mod twosided; // two-sided surfaces: back-face closed form, normal flips, one surface or two, emitter front only
 mod warm_day; // 96 warm-started 15-minute steps of a clear day against cold solves
