@@ -493,25 +493,16 @@ fn twosided_one_surface_equals_two_back_to_back_1mm_apart() {
 }
 
 #[test]
-#[ignore = "fails on 439b98c: of four coincident faces (two surfaces back to back, each \
-            with its back face) the LDIs' direct light and the sensors' rays take the \
-            lowest-index face of each side, but order_coincident also breaks the tie by \
-            ascending index among faces facing away, so a global line leaving a side across \
-            the group ends on the highest-index one (the other surface's back face): each \
-            face gets either its direct or its interreflected light"]
 fn twosided_one_surface_equals_two_back_to_back_0mm_apart() {
     // Physics and tolerance as for 1 mm: two outward surfaces in one plane (a wall modelled
     // twice, as exported models have it; the coincident-face rule of coincident.rs decides
     // which face shows) are the same wall as one two-sided surface.
     //
-    // Measured on 439b98c (why it is ignored): the model faces get the direct light and
-    // nothing reflected from the ground (in every line pixel the ground lies beyond the
-    // group, so its lines end on the back faces), the back faces get only that, and the
-    // sensors read the model faces: the shaded side's sensors read 46 % less reflected
-    // light at 0.3 m, the sunlit side's 9 % less, up to 24× their stated errors. One-sided
-    // (two faces, no tie) the same pair matches the single two-sided surface to the lux.
-    // Breaking the tie by descending index among faces facing away (so the lowest index
-    // shows on both sides, as in `Tracer::settle`) would make them one face per side.
+    // Fails without the tie-break of `order_coincident` for faces facing away (descending
+    // index, so the lowest index shows on both sides as `Tracer::settle` has it): measured
+    // on 439b98c, the model faces got the direct light and the global lines ended on the
+    // back faces, and the shaded side's sensors read 46 % less reflected light at 0.3 m
+    // (up to 24× their stated errors).
     let (sky, q) = (wall_sky(), Quality::default());
     let one = run(&wall_scene(WallModel::One, Faces::Both), &sky, &q);
     let two = run(

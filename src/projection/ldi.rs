@@ -88,10 +88,17 @@ pub fn order_coincident(list: &mut [Fragment], scene: &ProjectionScene, dir: DVe
                 // Facing the source first; then the smaller first when facing it (it shows
                 // to the source side), the smaller last when facing away (it shows to the
                 // far side).
+                // Equal areas: the lower index shows on both sides (nearest the source
+                // side when facing it, last when facing away), as the tracer settles it; two
+                // walls modelled back to back then keep one face per side for every kind
+                // of light.
                 let by_area = scene.areas[ta].total_cmp(&scene.areas[tb]);
-                fb.cmp(&fa)
-                    .then(if fa { by_area } else { by_area.reverse() })
-                    .then(a.tri.cmp(&b.tri))
+                let by_index = a.tri.cmp(&b.tri);
+                fb.cmp(&fa).then(if fa {
+                    by_area.then(by_index)
+                } else {
+                    by_area.reverse().then(by_index.reverse())
+                })
             });
         }
         start = end;
@@ -135,7 +142,12 @@ impl Ldi {
     }
 
     /// As [`Ldi::build`], its pixel no finer than `floor_m` metres.
-    pub fn build_floored(scene: &ProjectionScene, dir: DVec3, resolution: u32, floor_m: f64) -> Ldi {
+    pub fn build_floored(
+        scene: &ProjectionScene,
+        dir: DVec3,
+        resolution: u32,
+        floor_m: f64,
+    ) -> Ldi {
         Ldi::build_sized(scene, dir, None, DVec2::ZERO, |ext| {
             (ext.max_element() / resolution.max(1) as f64).max(floor_m)
         })
