@@ -211,8 +211,8 @@ impl ProjectionScene {
 /// hierarchy by visibility ratio and returns the record.
 ///
 /// A scene with nested windows ([`ProjectionScene::with_region`]) gets one LDI per window:
-/// the first at `resolution` pixels across its projection, each further one at twice the
-/// pixel of the one inside it. An element is refined against the LDI of the smallest
+/// the first at `resolution` pixels across its projection, each further one at
+/// [`crate::scene::WINDOW_PIXEL_GROWTH`] times the pixel of the one inside it. An element is refined against the LDI of the smallest
 /// window holding it, so the room keeps its resolution whatever the site's extent and
 /// the far context is still lit.
 pub fn project(
@@ -230,7 +230,7 @@ pub fn project(
         let pixel = first.camera.pixel;
         let mut ldis = vec![first];
         for (k, w) in scene.windows.iter().enumerate().skip(1) {
-            let p = pixel * (1u64 << k) as f64;
+            let p = pixel * crate::scene::WINDOW_PIXEL_GROWTH.powi(k as i32);
             ldis.push(Ldi::build_window(scene, dir, p, *w, glam::DVec2::ZERO));
         }
         refine_all(scene, &ldis, &scene.windows, params)

@@ -22,8 +22,8 @@ const FIX: f64 = 65536.0;
 /// A scene that fits the first of the nested windows around the mesh's region
 /// ([`crate::scene::context_windows`]) gets one pass of lines at `resolution` pixels across
 /// its diameter. A larger one gets a pass per window, with the same directions: the first
-/// at `resolution` pixels across that window's diameter, each further one at twice the
-/// spacing of the one inside it, and each estimating the rows whose smallest window it
+/// at `resolution` pixels across that window's diameter, each further one at
+/// [`crate::scene::WINDOW_PIXEL_GROWTH`] times the spacing of the one inside it, and each estimating the rows whose smallest window it
 /// is (far context still reflects into the room, at a line spacing that grows with its
 /// distance like its elements). Each row's estimate comes from the lines of one pass, all
 /// of which cross it completely, so it stays unbiased.
@@ -76,7 +76,7 @@ pub(super) fn operator(
             .enumerate()
             .map(|(k, w)| Pass {
                 window: *w,
-                pixel: pixel * (1u64 << k) as f64,
+                pixel: pixel * crate::scene::WINDOW_PIXEL_GROWTH.powi(k as i32),
                 rows: Some(of_row.iter().map(|&x| x == k).collect()),
             })
             .collect()
