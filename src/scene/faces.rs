@@ -11,6 +11,16 @@
 //!
 //! Glazing keeps one face (its transmission and mirror are two-sided already). An emitter's
 //! back face reflects but does not emit (Radiance `light` emits from its front only).
+//!
+//! Only faces that can see something cost: a triangle whose back looks into a closed solid
+//! (the inner face of a wall with thickness, a slab, a column, a desk) gets no back face,
+//! since no light reaches it and nothing outside the solid sees it. The test
+//! ([`enclosed_backs`]) is 16 fixed rays over each back's hemisphere: a cavity is a solid
+//! when every ray from each of its faces meets an opaque triangle from behind (the solid's
+//! other faces, whose normals point out) and no sensor looks into it; one ray that
+//! escapes, or meets a front or glazing, anywhere in the cavity keeps its back faces. The
+//! sample office, all of whose walls are solids, then keeps back faces only under its
+//! ground and inside its bottomless obstruction.
 
 use super::{Material, Scene, Triangle};
 
@@ -34,15 +44,16 @@ pub const BACK_SUFFIX: &str = " (back)";
 /// per-group outputs keep the sides apart.
 pub fn add_back_faces(scene: &mut Scene) {
     let n = scene.triangles.len();
+    let enclosed = enclosed_backs(scene);
     scene.input_triangles = n;
     scene.twin = vec![u32::MAX; n];
     // Scenes made in code may leave groups unnamed: their back faces keep the group.
     let mut back_group: Vec<u32> = (0..scene.groups.len()).map(|_| u32::MAX).collect();
     let mut back_material = vec![u32::MAX; scene.materials.len()];
-    for i in 0..n {
+    for (i, &sealed) in enclosed.iter().enumerate().take(n) {
         let t = scene.triangles[i];
         let m = &scene.materials[t.material as usize];
-        if m.is_glazing() {
+        if m.is_glazing() || sealed {
             continue;
         }
         let g = t.group as usize;
@@ -78,6 +89,87 @@ pub fn add_back_faces(scene: &mut Scene) {
         scene.twin.push(i as u32);
     }
     scene.faces = Faces::Both;
+}
+
+/// Rays per triangle of the enclosure test (a 4 × 4 stratified cosine pattern).
+const ENCLOSURE_RAYS: u32 = 4;
+
+/// For each triangle, whether its back looks into a closed solid. A triangle's back is
+/// sealed when every ray of a fixed cosine pattern over its back hemisphere, from its
+/// centroid, meets an opaque triangle from behind; the triangles met so are the same
+/// cavity. A cavity is a solid only when all its triangles are sealed and no sensor looks
+/// into it: a room modelled with its normals pointing out is sealed the same way, and its
+/// window (glazing) or a sensor inside opens it.
+fn enclosed_backs(scene: &Scene) -> Vec<bool> {
+    use crate::math::bvh::Bvh;
+    use crate::math::frame::basis;
+    use glam::DVec3;
+    let n = scene.triangles.len();
+    let tris: Vec<[DVec3; 3]> = scene.triangles.iter().map(|t| t.v).collect();
+    let bvh = Bvh::build(&tris);
+    let opaque: Vec<bool> = scene
+        .triangles
+        .iter()
+        .map(|t| !scene.materials[t.material as usize].is_glazing())
+        .collect();
+    let m = ENCLOSURE_RAYS;
+    let pattern = |w: DVec3| {
+        let (a, b) = basis(w);
+        (0..m * m).map(move |k| {
+            // Cell centres of a stratified grid on the unit square, cosine-mapped.
+            let u1 = ((k / m) as f64 + 0.5) / m as f64;
+            let u2 = ((k % m) as f64 + 0.5) / m as f64;
+            let r = u1.sqrt();
+            let phi = std::f64::consts::TAU * u2;
+            (a * (r * phi.cos()) + b * (r * phi.sin()) + w * (1.0 - u1).sqrt()).normalize()
+        })
+    };
+    // The opaque triangle a ray meets from behind, if that is what it meets.
+    let behind = |o: DVec3, d: DVec3| match bvh.closest_hit(o, d, 1e-7, f64::INFINITY) {
+        Some(h) if opaque[h.triangle as usize] && h.cos > 0.0 => Some(h.triangle as usize),
+        _ => None,
+    };
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn root(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    let mut open = vec![false; n];
+    for (i, t) in scene.triangles.iter().enumerate() {
+        let c = t.centroid();
+        for d in pattern(-t.normal()) {
+            match behind(c, d) {
+                Some(j) => {
+                    let (a, b) = (root(&mut parent, i), root(&mut parent, j));
+                    parent[a] = b;
+                }
+                None => open[i] = true,
+            }
+        }
+    }
+    for s in &scene.sensors {
+        for d in pattern(s.normal).chain(pattern(-s.normal)) {
+            if let Some(j) = behind(s.position, d) {
+                open[j] = true;
+            }
+        }
+    }
+    let mut cavity_open = vec![false; n];
+    for (i, &o) in open.iter().enumerate() {
+        if o {
+            let r = root(&mut parent, i);
+            cavity_open[r] = true;
+        }
+    }
+    (0..n)
+        .map(|i| {
+            let r = root(&mut parent, i);
+            !cavity_open[r]
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -128,5 +220,31 @@ mod tests {
         let s = b.build("t").unwrap();
         assert_eq!((s.input_triangles, s.triangles.len()), (1, 1));
         assert!(s.twin.is_empty());
+    }
+
+    #[test]
+    fn a_closed_solid_gets_no_back_faces_a_room_with_a_sensor_does() {
+        // A box with outward normals is a solid: nothing reaches its inside, so its faces
+        // get no back faces (they would cost rows and lines and receive nothing).
+        let solid = |sensor: bool| {
+            let mut b = SceneBuilder::new();
+            let m = b.add_opaque("m", 0.5);
+            b.add_box("box", m, DVec3::ZERO, DVec3::splat(2.0));
+            if sensor {
+                b.add_sensor(DVec3::splat(1.0), DVec3::Z);
+            }
+            b.build("t").unwrap()
+        };
+        let s = solid(false);
+        assert_eq!((s.input_triangles, s.triangles.len()), (12, 12));
+        // The same box with a sensor inside is a room modelled with its normals out: its
+        // inside is lit by nothing but is looked at, so every face keeps its back.
+        let s = solid(true);
+        assert_eq!(s.triangles.len(), 24);
+        // A lone plate sees the open world from both sides.
+        let mut b = SceneBuilder::new();
+        let m = b.add_opaque("m", 0.5);
+        b.add_triangle("p", m, [DVec3::ZERO, DVec3::X, DVec3::Y]);
+        assert_eq!(b.build("t").unwrap().triangles.len(), 2);
     }
 }
