@@ -554,6 +554,8 @@ mod tests {
                 },
             ],
             triangles: [square(-1.0, 0), square(0.0, 1), square(1.0, 1)].concat(),
+            // A sensor under the floor: something behind it, so it keeps its back face.
+            sensors: vec![(DVec3::new(0.0, 0.0, -2.0), DVec3::Z)],
             ..ModelInput::default()
         };
         Scene::from_model(std::path::Path::new("<t>"), input).unwrap()

@@ -289,6 +289,8 @@ fn surfaces_report_incident_and_transmitted_solar_per_group() {
     }
     b.input.groups = vec!["plate".into(), "pane".into()];
     b.sensor(glam::DVec3::new(1.0, 1.0, 1.5), glam::DVec3::Z);
+    // A sensor under the plate, so its back has something to see and gets a back face.
+    b.sensor(glam::DVec3::new(1.0, 1.0, 0.5), -glam::DVec3::Z);
     let scene = b.build();
     let wea = "place Greenwich\nlatitude 51.4769\nlongitude 0\ntime_zone 0\nsite_elevation 0\n\
                weather_data_file_units 1\n6 21 9.5 0 150\n6 21 12.5 700 120\n6 21 23.5 0 0\n";

@@ -19,8 +19,9 @@
 //! when every ray from each of its faces meets an opaque triangle from behind (the solid's
 //! other faces, whose normals point out) and no sensor looks into it; one ray that
 //! escapes, or meets a front or glazing, anywhere in the cavity keeps its back faces. The
-//! sample office, all of whose walls are solids, then keeps back faces only under its
-//! ground and inside its bottomless obstruction.
+//! sample office, all of whose walls are solids, then keeps back faces only inside its
+//! bottomless obstruction. A triangle with nothing behind it at all (the ground under a
+//! site, [`nothing_behind`]) gets none either.
 
 use super::{Material, Scene, Triangle};
 
@@ -45,6 +46,7 @@ pub const BACK_SUFFIX: &str = " (back)";
 pub fn add_back_faces(scene: &mut Scene) {
     let n = scene.triangles.len();
     let enclosed = enclosed_backs(scene);
+    let empty_behind = nothing_behind(scene);
     scene.input_triangles = n;
     scene.twin = vec![u32::MAX; n];
     // Scenes made in code may leave groups unnamed: their back faces keep the group.
@@ -53,7 +55,7 @@ pub fn add_back_faces(scene: &mut Scene) {
     for (i, &sealed) in enclosed.iter().enumerate().take(n) {
         let t = scene.triangles[i];
         let m = &scene.materials[t.material as usize];
-        if m.is_glazing() || sealed {
+        if m.is_glazing() || sealed || empty_behind[i] {
             continue;
         }
         let g = t.group as usize;
@@ -89,6 +91,33 @@ pub fn add_back_faces(scene: &mut Scene) {
         scene.twin.push(i as u32);
     }
     scene.faces = Faces::Both;
+}
+
+/// For each triangle, whether nothing at all lies behind it: every corner of the bounds of
+/// the geometry and the sensors is on or in front of its plane (the ground plane under a
+/// site). Its back would see nothing and be seen by nothing, yet cost a fragment in every
+/// pixel of every projection that crosses it.
+fn nothing_behind(scene: &Scene) -> Vec<bool> {
+    let (mut lo, mut hi) = scene.bounds();
+    for s in &scene.sensors {
+        lo = lo.min(s.position);
+        hi = hi.max(s.position);
+    }
+    let scale = (hi - lo).max_element().max(1.0);
+    scene
+        .triangles
+        .iter()
+        .map(|t| {
+            let n = t.normal();
+            // The corner furthest behind the plane.
+            let far = glam::DVec3::new(
+                if n.x >= 0.0 { lo.x } else { hi.x },
+                if n.y >= 0.0 { lo.y } else { hi.y },
+                if n.z >= 0.0 { lo.z } else { hi.z },
+            );
+            n.dot(far - t.v[0]) >= -1e-9 * scale
+        })
+        .collect()
 }
 
 /// Rays per triangle of the enclosure test (a 4 × 4 stratified cosine pattern).
@@ -194,6 +223,8 @@ mod tests {
         b.add_triangle("w", wall, tri);
         b.add_triangle("l", lamp, tri.map(|p| p + DVec3::Z));
         b.add_triangle("g", glass, tri.map(|p| p + 2.0 * DVec3::Z));
+        // Something below the lowest triangle, so its back has something to see.
+        b.add_sensor(DVec3::new(0.2, 0.2, -1.0), DVec3::Z);
         let s = b.build("t").unwrap();
         assert_eq!(s.faces, Faces::Both);
         assert_eq!((s.input_triangles, s.triangles.len()), (3, 5));
@@ -241,10 +272,18 @@ mod tests {
         // inside is lit by nothing but is looked at, so every face keeps its back.
         let s = solid(true);
         assert_eq!(s.triangles.len(), 24);
-        // A lone plate sees the open world from both sides.
+        // A plate with something on each side keeps both faces; the ground under a
+        // sensor has nothing behind it and gets no back face.
         let mut b = SceneBuilder::new();
         let m = b.add_opaque("m", 0.5);
         b.add_triangle("p", m, [DVec3::ZERO, DVec3::X, DVec3::Y]);
+        b.add_sensor(DVec3::new(0.2, 0.2, -1.0), DVec3::Z);
+        b.add_sensor(DVec3::new(0.2, 0.2, 1.0), -DVec3::Z);
         assert_eq!(b.build("t").unwrap().triangles.len(), 2);
+        let mut b = SceneBuilder::new();
+        let m = b.add_opaque("m", 0.5);
+        b.add_triangle("ground", m, [DVec3::ZERO, DVec3::X, DVec3::Y]);
+        b.add_sensor(DVec3::new(0.2, 0.2, 1.0), DVec3::Z);
+        assert_eq!(b.build("t").unwrap().triangles.len(), 1);
     }
 }

@@ -363,12 +363,13 @@ f 1 2 4
         ));
         let s = r.unwrap();
         assert_eq!(s.input_triangles, 3);
-        // Two-sided by default: one back face per opaque triangle (the window has none).
+        // Two-sided by default; the floor is the lowest surface, with nothing behind it, so
+        // it gets no back face (and the window, glazing, has none).
         assert_eq!(s.faces, Faces::Both);
-        assert_eq!(s.triangles.len(), 3 + 2);
+        assert_eq!(s.triangles.len(), 3);
         assert_eq!(s.materials.len(), 2);
         assert!(s.has_glazing());
-        assert_eq!(s.groups, ["floor", "window", "floor (back)"]);
+        assert_eq!(s.groups, ["floor", "window"]);
         assert_eq!(s.sensors.len(), 2);
         assert_eq!(
             s.site,
