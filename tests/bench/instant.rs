@@ -1,6 +1,8 @@
 //! Benchmark of one instant (`cargo bench --bench instant`): per-stage times (medians of
 //! several runs), peak memory, and error against run time for each quality preset against
-//! the `reference` preset, on the sample office and a generated 10 000-triangle building.
+//! the `reference` preset, on the sample office, the same office on a 1 km ground and in a
+//! ring of context blocks (issue 13: the room must not pay for the site's extent), and a
+//! generated 10 000-triangle building.
 //! It prints figures; nothing here asserts a time.
 
 use daystep::scene::Scene;
@@ -43,8 +45,9 @@ fn bench_scene(name: &str, scene: &Scene, runs: usize) {
         dew_point_c: None,
     };
     println!(
-        "\n## {name}: {} triangles, {} sensors",
-        scene.triangles.len(),
+        "\n## {name}: {} triangles ({} back faces), {} sensors",
+        scene.input_triangles,
+        scene.triangles.len() - scene.input_triangles,
         scene.sensors.len()
     );
     // Reset the peak-RSS mark (Linux: "5" → clear_refs) so the figure is this scene's.
@@ -146,6 +149,19 @@ fn main() {
         Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office/scene.toml"))
             .unwrap();
     bench_scene("sample office", &office, 5);
+    for (name, site) in [
+        (
+            "office on a 1 km ground",
+            scenes::OfficeSite::KilometreGround,
+        ),
+        (
+            "office in a ring of context blocks",
+            scenes::OfficeSite::ContextRing,
+        ),
+    ] {
+        let scene = scenes::office_on_site(site).build(name).unwrap();
+        bench_scene(name, &scene, 3);
+    }
     let building = scenes::multi_storey_building(10_000);
     bench_scene("generated building", &building, 3);
     println!("\npeak RSS of the whole benchmark: {:.0} MB", peak_rss_mb());
