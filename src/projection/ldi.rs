@@ -114,8 +114,6 @@ pub struct Ldi {
     fragments: Vec<Fragment>,
     /// Per-triangle factor applied to light passing it along this direction.
     pass: Vec<Rgb>,
-    /// Opposite face of each triangle ([`ProjectionScene::twin`]).
-    twin: Vec<u32>,
 }
 
 impl Ldi {
@@ -300,7 +298,6 @@ impl Ldi {
             offsets,
             fragments,
             pass,
-            twin: scene.twin.clone(),
         }
     }
 
@@ -316,18 +313,18 @@ impl Ldi {
     }
 
     /// Transmission (per channel) of light reaching height `h` in pixel `(i, j)` along the
-    /// line, ignoring fragments of triangle `skip` (the receiver itself) and of its other
-    /// face: a point off the pixel centre lies below its own plane's fragment there when
-    /// the plane is tilted to the line, and a surface does not shadow itself.
-    pub fn transmission_at(&self, i: u32, j: u32, h: f64, skip: u32) -> Rgb {
+    /// line, ignoring fragments of the triangles `skip`: the receiver's two faces (its
+    /// front and its back face, `u32::MAX` for none). A point off the pixel centre lies
+    /// below its own plane's fragment there when the plane is tilted to the line, and a
+    /// surface does not shadow itself.
+    pub fn transmission_at(&self, i: u32, j: u32, h: f64, skip: [u32; 2]) -> Rgb {
         let mut t = Rgb::ONE;
         let eps = 1e-6 * (1.0 + h.abs());
-        let twin = self.twin.get(skip as usize).copied().unwrap_or(u32::MAX);
         for f in self.pixel(i, j) {
             if (f.height as f64) <= h + eps {
                 break;
             }
-            if f.tri != skip && f.tri != twin {
+            if !skip.contains(&f.tri) {
                 t *= self.pass[f.tri as usize];
                 if t == Rgb::ZERO {
                     break;

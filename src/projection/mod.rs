@@ -46,8 +46,6 @@ pub struct ProjectionParams {
     pub margin_m: f64,
 }
 
-pub use crate::scene::CONTEXT_DIAMETERS;
-
 impl Default for ProjectionParams {
     fn default() -> Self {
         ProjectionParams {
@@ -167,9 +165,10 @@ impl ProjectionScene {
     /// Extracts what projection needs from a scene (the whole scene at one resolution).
     pub fn new(scene: &Scene) -> Self {
         let t = &scene.triangles;
+        let bounds = scene.bounds();
         ProjectionScene {
-            bounds: scene.bounds(),
-            windows: vec![scene.bounds()],
+            bounds,
+            windows: vec![bounds],
             vertices: t.iter().map(|t| t.v).collect(),
             normals: t.iter().map(|t| t.normal()).collect(),
             areas: t.iter().map(|t| t.area()).collect(),

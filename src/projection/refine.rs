@@ -24,7 +24,9 @@ struct Coverage {
     t_sum: Rgb,
 }
 
-fn coverage(ldi: &Ldi, tri: u32, v: &[DVec3; 3]) -> Coverage {
+/// Coverage of the element `v` of triangle `faces[0]` (`faces[1]`: its other face).
+fn coverage(ldi: &Ldi, faces: [u32; 2], v: &[DVec3; 3]) -> Coverage {
+    let tri = faces[0];
     let cam = &ldi.camera;
     let p = v.map(|x| cam.to_pixel(x));
     let h = v.map(|x| cam.height_of(x));
@@ -34,7 +36,7 @@ fn coverage(ldi: &Ldi, tri: u32, v: &[DVec3; 3]) -> Coverage {
             Some(f) => Rgb::new(f.t_in[0] as f64, f.t_in[1] as f64, f.t_in[2] as f64),
             // Rounding at the midpoints can put a child's sample just outside its
             // triangle's own samples; fall back to the line itself.
-            None => ldi.transmission_at(i, j, z, tri),
+            None => ldi.transmission_at(i, j, z, faces),
         };
         c.n_p += 1;
         if t.max_element() > 0.0 {
@@ -46,13 +48,13 @@ fn coverage(ldi: &Ldi, tri: u32, v: &[DVec3; 3]) -> Coverage {
 }
 
 /// Transmission at a single point (for patches too small to cover a pixel centre).
-fn point_transmission(ldi: &Ldi, tri: u32, v: &[DVec3; 3]) -> Rgb {
+fn point_transmission(ldi: &Ldi, faces: [u32; 2], v: &[DVec3; 3]) -> Rgb {
     let cam = &ldi.camera;
     let c = (v[0] + v[1] + v[2]) / 3.0;
     let q = cam.to_pixel(c);
     let i = (q.x.floor().max(0.0) as u32).min(cam.width - 1);
     let j = (q.y.floor().max(0.0) as u32).min(cam.height - 1);
-    ldi.transmission_at(i, j, cam.height_of(c), tri)
+    ldi.transmission_at(i, j, cam.height_of(c), faces)
 }
 
 /// The LDIs of one direction, one per window ([`crate::scene::context_windows`]; one LDI
@@ -111,6 +113,10 @@ fn refine_triangle(
         return (0, 0); // faces away: receives nothing from this source
     }
     let glazing = scene.glazing_tf[tri as usize].max_element() > 0.0;
+    let faces = [
+        tri,
+        scene.twin.get(tri as usize).copied().unwrap_or(u32::MAX),
+    ];
     let max_depth = params.max_depth.min(MAX_DEPTH);
     let (mut tested, mut splits) = (0, 0);
     let mut stack = vec![(ElementKey::root(tri), scene.vertices[tri as usize])];
@@ -119,9 +125,9 @@ fn refine_triangle(
         let area = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
         let ldi = views.for_element(&v);
         let pixel_area = ldi.camera.pixel * ldi.camera.pixel;
-        let c = coverage(ldi, tri, &v);
+        let c = coverage(ldi, faces, &v);
         let t_mean = if c.n_p == 0 {
-            point_transmission(ldi, tri, &v)
+            point_transmission(ldi, faces, &v)
         } else {
             let vr = c.n_v as f64 / c.n_p as f64;
             let partial = vr > params.v_min && vr < params.v_max

@@ -36,13 +36,6 @@ pub(super) fn operator(
     seed: u64,
 ) -> (Sparse, u64) {
     let rows = mesh.elements.len();
-    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-    for t in &pscene.vertices {
-        for p in t {
-            lo = lo.min(*p);
-            hi = hi.max(*p);
-        }
-    }
     let diameter = |b: (DVec3, DVec3)| {
         let d = (b.1 - b.0).length();
         if d.is_finite() {
@@ -51,7 +44,7 @@ pub(super) fn operator(
             1.0
         }
     };
-    let whole = (lo, hi);
+    let whole = pscene.bounds;
     let res = resolution.max(1) as f64;
     // Work sized to the scene: no finer than the elements need.
     let floor = mesh.line_spacing_floor();
@@ -92,17 +85,16 @@ pub(super) fn operator(
             );
             let mut pairs: Vec<(u64, [u64; 3])> = Vec::new();
             let mut counts = vec![0u32; rows];
+            let pass_factor: Vec<Rgb> = (0..pscene.vertices.len())
+                .map(|t| pscene.pass_factor(t, d))
+                .collect();
             for pass in &passes {
-                bundle(
-                    pscene,
-                    tracer,
-                    mesh,
-                    pass,
+                let line = Line {
                     d,
                     jitter,
-                    &mut pairs,
-                    &mut counts,
-                );
+                    pass_factor: &pass_factor,
+                };
+                bundle(pscene, tracer, mesh, pass, &line, &mut pairs, &mut counts);
             }
             (merge_pairs(pairs), counts)
         })
@@ -139,25 +131,29 @@ impl Pass {
     }
 }
 
-/// The lines of one bundle direction `d` in one pass: per opaque fragment a line count for
+/// One bundle direction, shared by its passes: the direction, the pixel grid's jitter and
+/// each triangle's transmission along it.
+struct Line<'a> {
+    d: DVec3,
+    jitter: glam::DVec2,
+    pass_factor: &'a [Rgb],
+}
+
+/// The lines of one bundle direction in one pass: per opaque fragment a line count for
 /// its row, per pair of consecutive faces that face each other a link each way, and the
 /// glazing mirror's one-way links; only for the rows the pass serves (as receivers).
-#[allow(clippy::too_many_arguments)]
 fn bundle(
     pscene: &ProjectionScene,
     tracer: &Tracer,
     mesh: &Mesh,
     pass: &Pass,
-    d: DVec3,
-    jitter: glam::DVec2,
+    line: &Line,
     pairs: &mut Vec<(u64, [u64; 3])>,
     counts: &mut [u32],
 ) {
-    let ldi = Ldi::build_window(pscene, d, pass.pixel, pass.window, jitter);
+    let (d, pass_factor) = (line.d, line.pass_factor);
+    let ldi = Ldi::build_window(pscene, d, pass.pixel, pass.window, line.jitter);
     let cam = ldi.camera;
-    let pass_factor: Vec<Rgb> = (0..pscene.vertices.len())
-        .map(|t| pscene.pass_factor(t, d))
-        .collect();
     let opaque = |t: usize| pscene.glazing_tf[t].max_element() <= 0.0;
     let mut panes: Vec<Fragment> = Vec::new();
     let mirror = Mirror {
