@@ -224,10 +224,11 @@ fn a_day_agrees_with_independent_cold_instants() {
 }
 
 #[test]
-fn adjoint_daylight_coefficients_equal_forward_solves() {
-    // The same two days with per-step forward solves (the default) and with adjoint
-    // responses: the same linear system read in another order, so equal within the
-    // iteration tolerance (1e-3 relative per solve), far below the stated error.
+fn daylight_coefficients_agree_with_forward_solves_over_two_days() {
+    // The same two days with per-step forward solves and with daylight coefficients (the
+    // default): the sky part is the same linear system read in another order, the sun's
+    // interreflection is interpolated on the sun grid (4° at draft). Whole annual runs, so
+    // this also checks the planning of every step's nodes before the steps run.
     let d = tempfile::tempdir().unwrap();
     let (scene, weather, q, store) = setup(d.path());
     let go = AtomicBool::new(false);
@@ -236,10 +237,10 @@ fn adjoint_daylight_coefficients_equal_forward_solves() {
         stop: &go,
         progress: &quiet,
     };
-    let run = |name: &str, bytes: u64| {
+    let run = |name: &str, coefficients: bool| {
         let out = d.path().join(name);
         let o = AnnualOptions {
-            response_max_bytes: bytes,
+            daylight_coefficients: coefficients,
             ..opts(("2021-03-20", "2021-03-21"), (1, 1))
         };
         let r = run_annual(&scene, &weather, &q, &store, &out, &o, &control).unwrap();
@@ -247,27 +248,32 @@ fn adjoint_daylight_coefficients_equal_forward_solves() {
             daystep::export::read_illuminance_csv(&out.join("illuminance.csv")).unwrap();
         (r, rows)
     };
-    let (rf, forward) = run("forward", 0);
-    let (ra, adjoint) = run("adjoint", u64::MAX);
+    let (rf, forward) = run("forward", false);
+    let (rc, coefficients) = run("coefficients", true);
     assert_eq!(
-        (rf.interreflection.as_str(), ra.interreflection.as_str()),
-        ("forward", "adjoint")
+        (rf.interreflection.as_str(), rc.interreflection.as_str()),
+        ("forward", "daylight coefficients")
     );
-    let mut worst = 0.0f64;
-    let mut lit = 0;
-    for (a, f) in adjoint.iter().zip(&forward) {
+    let c = rc.coefficients.expect("coefficient counters");
+    assert!(c.nodes > 0 && c.sun_grid_vertices > 0 && c.computed == c.nodes + c.sun_grid_vertices);
+    let mut rel: Vec<f64> = Vec::new();
+    for (a, f) in coefficients.iter().zip(&forward) {
         for (x, y) in a.iter().zip(f) {
             if *y > 10.0 {
-                lit += 1;
-                worst = worst.max((x - y).abs() / y);
+                rel.push((x - y).abs() / y);
             } else {
-                assert!((x - y).abs() < 0.1, "{x} vs {y}");
+                assert!((x - y).abs() < 1.0, "{x} vs {y}");
             }
         }
     }
-    eprintln!("adjoint vs forward: {lit} lit sensor-steps, worst relative difference {worst:.2e}");
-    assert!(lit > 50);
-    assert!(worst < 5e-3, "{worst}");
+    rel.sort_by(f64::total_cmp);
+    let (med, worst) = (rel[rel.len() / 2], rel[rel.len() - 1]);
+    eprintln!(
+        "coefficients vs forward: {} lit sensor-steps, median {med:.2e}, worst {worst:.2e}",
+        rel.len()
+    );
+    assert!(rel.len() > 50);
+    assert!(med < 5e-3 && worst < 0.1, "median {med}, worst {worst}");
 }
 
 #[test]

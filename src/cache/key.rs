@@ -119,6 +119,12 @@ pub const KIND_SUN: u8 = 1;
 pub const KIND_GROUND: u8 = 2;
 /// Record kind: a global-line interreflection operator (direction 0, resolution 0).
 pub const KIND_TRANSPORT: u8 = 3;
+/// Record kind: a vertex of the sun's interpolation grid ([`sun_direction_id`] of its key).
+pub const KIND_SUN_GRID: u8 = 4;
+/// Record kind: one direction's interreflection responses at the sensors (daylight
+/// coefficients; the direction id and kind of the direction's own record, hashed in
+/// `scene`).
+pub const KIND_COEFFICIENTS: u8 = 5;
 // Kinds 3..=255 are free for later record types (global-line bundles, depth maps, …).
 
 /// Lossless 64-bit id of a sun-grid cell: spacing δ (µdeg) in the top 32 bits, the altitude
@@ -188,6 +194,10 @@ impl RecordKey {
             SourceKey::Sky(n) => Some(Self::sky_node(scene, n, resolution)),
             SourceKey::Ground(n) => Some(Self::ground(scene, n, resolution)),
             SourceKey::Sun(s) => Self::sun(scene, s, resolution),
+            SourceKey::SunGrid(s) => Some(RecordKey {
+                kind: KIND_SUN_GRID,
+                ..Self::sun(scene, s, resolution)?
+            }),
         }
     }
 

@@ -64,6 +64,7 @@ pub fn run(a: AnnualArgs) -> Result<()> {
         metrics: config::metric_params(&a.metrics),
         ill: a.ill,
         surfaces: a.surfaces,
+        daylight_coefficients: !a.forward,
         ..AnnualOptions::default()
     };
     opts.metrics.validate()?;

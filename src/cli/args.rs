@@ -229,6 +229,11 @@ pub struct AnnualArgs {
     /// and, for glazing, transmitted solar power (W).
     #[arg(long)]
     pub surfaces: bool,
+    /// Solve the interreflection at every step (warm-started within each day) instead of
+    /// summing cached daylight coefficients: slower, and what the coefficients are
+    /// checked against (--surfaces implies it).
+    #[arg(long)]
+    pub forward: bool,
     /// Seed of the Monte Carlo parts (results are a pure function of it).
     #[arg(long)]
     pub seed: Option<u64>,

@@ -52,7 +52,7 @@ impl Transport {
 impl TransportSensor {
     /// A sensor's estimate from its per-part fine values and the mean coarse value: mean,
     /// standard error of the mean over parts, |mean − coarse|.
-    pub(super) fn from_parts(fine: &[Rgb], coarse: Rgb) -> TransportSensor {
+    pub fn from_parts(fine: &[Rgb], coarse: Rgb) -> TransportSensor {
         let n = fine.len() as f64;
         let mean = fine.iter().fold(Rgb::ZERO, |a, x| a + *x) / n;
         let var = fine

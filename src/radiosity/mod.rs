@@ -11,6 +11,7 @@
 //! comparison is in `docs/design.md`.
 
 mod bundles; // the operator estimate: line bundles through LDIs, glazing mirror links
+pub mod coefficients; // grey daylight coefficients of many directions, blocked adjoint
 mod coarse; // the operator one level coarser, for the discretisation estimate
 mod gather; // sensor gather matrix, and the sensors' reading of a solution
 pub mod mesh; // the fixed mesh: unknowns, point → row, area averages onto it
@@ -20,6 +21,7 @@ mod sparse; // sparse RGB rows
 mod strata; // equal-area direction strata of the bundles
 pub mod transport; // the Transport type, its parameters and build
 
+pub use coefficients::AdjointBlock;
 pub use gather::TransportSensor;
 pub use mesh::Mesh;
 pub use response::{DirectionResponse, SensorResponse};

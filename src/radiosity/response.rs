@@ -23,7 +23,7 @@ use rayon::prelude::*;
 use std::time::Instant;
 
 /// Sensors solved together (a fixed block: results do not depend on the thread count).
-const BLOCK: usize = 32;
+pub const BLOCK: usize = 32;
 
 /// The adjoint responses of a [`Transport`]'s sensors (see the module doc).
 #[derive(Clone, Debug)]
@@ -230,7 +230,7 @@ impl SensorResponse {
 
 /// Gauss–Seidel on the adjoint for sensors `range`: returns X as rows × 3 × |range| and
 /// the sweeps done.
-fn adjoint_block(
+pub(super) fn adjoint_block(
     f: &Sparse,
     g: &Sparse,
     rho: &[Rgb],

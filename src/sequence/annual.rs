@@ -38,15 +38,10 @@ use std::time::Instant;
 /// Days computed in parallel between checkpoints.
 const DAYS_PER_BATCH: usize = 8;
 
-/// Suggested memory for adjoint sensor responses when a caller opts in
-/// ([`AnnualOptions::response_max_bytes`]); the default is 0, forward solves.
-///
-/// Why forward is the default: on the sample office (7 848 rows, 165 sensors) a week took
-/// 23.3 s with adjoint responses against 7.9 s forward, both from a warm cache — each of
-/// the ~1 400 distinct directions of the week costs a pass over rows × 3 × sensors × 8
-/// response values (28 ms, memory-bound), more than the warm-started solves it replaces
-/// (≈ 16 ms per step). The adjoint pays off only when few directions serve many steps.
-pub const RESPONSE_MAX_BYTES: u64 = 512 << 20;
+/// Default memory for the adjoint sensor responses held at once while daylight
+/// coefficients are computed ([`AnnualOptions::response_max_bytes`]): sensors are solved in
+/// blocks that fit it.
+pub const RESPONSE_MAX_BYTES: u64 = 256 << 20;
 
 /// What an annual run is asked to do besides the defaults.
 #[derive(Clone, Debug)]
@@ -61,9 +56,12 @@ pub struct AnnualOptions {
     pub metrics: MetricParams,
     /// Also write a Radiance/DAYSIM-style `illuminance.ill`.
     pub ill: bool,
-    /// Memory allowed for adjoint sensor responses (daylight coefficients), bytes; 0 (the
-    /// default, see [`RESPONSE_MAX_BYTES`] for why) makes every step a warm-started forward
-    /// solve.
+    /// Daylight coefficients (the default): each sky node's and sun-grid vertex's response
+    /// is computed once and cached, and a step is a sum over its sources. False makes
+    /// every step a warm-started forward solve (what `--surfaces` needs).
+    pub daylight_coefficients: bool,
+    /// Memory for the adjoint responses held at once while coefficients are computed,
+    /// bytes ([`RESPONSE_MAX_BYTES`]).
     pub response_max_bytes: u64,
     /// Also write `surfaces.csv` (per group: incident irradiance, transmitted solar power).
     pub surfaces: bool,
@@ -77,7 +75,8 @@ impl Default for AnnualOptions {
             shard: (1, 1),
             metrics: MetricParams::default(),
             ill: false,
-            response_max_bytes: 0,
+            daylight_coefficients: true,
+            response_max_bytes: RESPONSE_MAX_BYTES,
             surfaces: false,
         }
     }
@@ -114,9 +113,11 @@ pub struct AnnualReport {
     pub cache: crate::cache::CacheStats,
     /// Whether the interreflection operator came from the cache.
     pub operator_from_cache: bool,
-    /// How each step's interreflection was computed: "adjoint" (per-sensor responses,
-    /// solved once, and per-direction daylight coefficients), "forward" (a warm-started
-    /// solve per step, for scenes whose responses exceed [`RESPONSE_MAX_BYTES`]) or "none".
+    /// What computing (or reading) the daylight coefficients did, when the steps use them.
+    pub coefficients: Option<super::coefficients::CoefficientStats>,
+    /// How each step's interreflection was computed: "daylight coefficients" (per node
+    /// and sun-grid vertex, computed once, [`super::coefficients`]), "forward" (a
+    /// warm-started solve per step: surface output, emitters, or asked for) or "none".
     pub interreflection: String,
     /// Gauss–Seidel sweeps over all steps, and of the cold first steps of the days.
     pub sweeps: u64,
@@ -224,7 +225,7 @@ pub fn run_annual(
     let (mut w_sun, done_sun) = IlluminanceWriter::resume(&out.join("direct_sun.csv"), sensors)?;
     // The interreflection operator (geometry only, cached) is needed before resuming when
     // surfaces are asked for: its mesh defines their columns.
-    let engine = Engine::new(
+    let mut engine = Engine::new(
         scene,
         quality,
         store,
@@ -233,6 +234,18 @@ pub fn run_annual(
             response_max_bytes: opts.response_max_bytes,
         },
     );
+    if opts.daylight_coefficients && !opts.surfaces {
+        // Every lit step's sky, so the coefficients of all its sources are computed (or
+        // read) together before the steps run.
+        let lit: Vec<(StepTime, SkySpec)> = days
+            .iter()
+            .flatten()
+            .filter(|s| matches!(classify(scene, s), Kind::Day { .. }))
+            .map(|s| (step_time(scene, s), perez(s.record)))
+            .collect();
+        engine.prepare(&lit);
+    }
+    report.coefficients = engine.coefficient_stats();
     report.operator_from_cache = engine.operator_from_cache();
     if engine.operator().is_none() {
         report.skipped.push(
@@ -507,6 +520,21 @@ fn classify(scene: &Scene, s: &Planned) -> Kind {
     }
 }
 
+fn step_time(scene: &Scene, s: &Planned) -> StepTime {
+    StepTime {
+        utc: s.record.utc(&scene.site),
+        local: s.time,
+    }
+}
+
+fn perez(r: &WeatherRecord) -> SkySpec {
+    SkySpec::Perez {
+        dni: r.dni,
+        dhi: r.dhi,
+        dew_point_c: r.dew_point_c,
+    }
+}
+
 struct Ctx<'a> {
     scene: &'a Scene,
     weather: &'a Weather,
@@ -539,15 +567,8 @@ impl Ctx<'_> {
             });
         }
         let r = s.record;
-        let at = StepTime {
-            utc: r.utc(&self.scene.site),
-            local: s.time,
-        };
-        let spec = SkySpec::Perez {
-            dni: r.dni,
-            dhi: r.dhi,
-            dew_point_c: r.dew_point_c,
-        };
+        let at = step_time(self.scene, s);
+        let spec = perez(r);
         let step = self
             .engine
             .step(&at, &spec, state.as_ref(), false)

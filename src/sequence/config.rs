@@ -65,6 +65,9 @@ pub struct Quality {
     pub sky: SkyParams,
     /// Sun snapping grid spacing, degrees.
     pub sun_spacing_deg: f64,
+    /// Spacing of the grid the sun's interreflected light is interpolated on in annual
+    /// runs (daylight coefficients), degrees ([`crate::sources::SunGrid`]).
+    pub sun_grid_deg: f64,
     /// LDI and refinement.
     pub projection: ProjectionParams,
     /// Sensor gather (direct).
@@ -80,6 +83,7 @@ impl Quality {
             name: "default",
             sky: SkyParams::default(),
             sun_spacing_deg: 0.25,
+            sun_grid_deg: 3.0,
             projection: ProjectionParams::default(),
             sensors: SensorParams::default(),
             // Measured on the office against path tracing (docs/design.md): 1 024 directions at
@@ -100,6 +104,7 @@ impl Quality {
                     ..base.sky
                 },
                 sun_spacing_deg: 1.0,
+                sun_grid_deg: 6.0,
                 // Coarse LDIs misplace the sun patch on the elements, and the indirect light
                 // inherits it (measured: 16 % on the office); projections are cheap.
                 projection: base.projection,
@@ -126,6 +131,7 @@ impl Quality {
                     ..base.sky
                 },
                 sun_spacing_deg: 0.1,
+                sun_grid_deg: 1.5,
                 projection: ProjectionParams {
                     max_resolution: 2048,
                     min_resolution: 128,
@@ -156,6 +162,7 @@ impl Quality {
                     ..base.sky
                 },
                 sun_spacing_deg: 0.05,
+                sun_grid_deg: 1.0,
                 projection: ProjectionParams {
                     max_resolution: 4096,
                     min_resolution: 256,
@@ -196,6 +203,7 @@ impl Quality {
         Quality {
             sky: self.sky.coarser(),
             sun_spacing_deg: self.sun_spacing_deg * 2.0,
+            sun_grid_deg: self.sun_grid_deg * 2.0,
             sensors: SensorParams {
                 visibility_depth: self.sensors.visibility_depth.saturating_sub(1),
                 visibility_tolerance: self.sensors.visibility_tolerance * 2.0,

@@ -37,21 +37,7 @@ impl MeshMemo {
         if let Some(w) = self.0.lock().expect("mesh memo").get(&key) {
             return w.clone();
         }
-        let mut h = Hierarchy::new(scene);
-        let unit = Source {
-            normal_irradiance: Rgb::ONE,
-            ..*src
-        };
-        let d = crate::transfer::transfer(&mut h, std::slice::from_ref(&unit), &[record]);
-        let e: Vec<Rgb> = d.sun.iter().zip(&d.sky).map(|(a, b)| *a + *b).collect();
-        let rows = op.mesh.average_onto(&h, &e);
-        let w: MeshWeights = Arc::new(
-            rows.into_iter()
-                .enumerate()
-                .filter(|(_, v)| *v != Rgb::ZERO)
-                .map(|(r, v)| (r as u32, v))
-                .collect(),
-        );
+        let w: MeshWeights = Arc::new(mesh_weights(scene, op, src, record));
         self.0
             .lock()
             .expect("mesh memo")
@@ -59,6 +45,31 @@ impl MeshMemo {
             .or_insert(w)
             .clone()
     }
+}
+
+/// The direct irradiance of `op`'s mesh per unit normal irradiance of `src`, projected into
+/// `record`: the record's leaf weights transferred onto a fresh hierarchy and averaged onto
+/// the rows by area; (row, RGB weight) for the rows it reaches.
+pub fn mesh_weights(
+    scene: &Scene,
+    op: &Transport,
+    src: &Source,
+    record: &DirectionRecord,
+) -> Vec<(u32, Rgb)> {
+    let mut h = Hierarchy::new(scene);
+    let unit = Source {
+        normal_irradiance: Rgb::ONE,
+        ..*src
+    };
+    let d = crate::transfer::transfer(&mut h, std::slice::from_ref(&unit), &[record]);
+    let e: Vec<Rgb> = d.sun.iter().zip(&d.sky).map(|(a, b)| *a + *b).collect();
+    op.mesh
+        .average_onto(&h, &e)
+        .into_iter()
+        .enumerate()
+        .filter(|(_, v)| *v != Rgb::ZERO)
+        .map(|(r, v)| (r as u32, v))
+        .collect()
 }
 
 /// Direct irradiance of every row of the mesh (RGB W/m²): Σ over `sources` in order of

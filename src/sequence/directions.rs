@@ -180,6 +180,18 @@ impl<'a> Directions<'a> {
             self.reused.fetch_add(1, Ordering::Relaxed);
             return d.clone();
         }
+        let data = Arc::new(self.fetch(source, resolution));
+        self.memo
+            .lock()
+            .expect("memo lock")
+            .entry(id)
+            .or_insert(data)
+            .clone()
+    }
+
+    /// As [`Self::get`], without keeping the data in this run's memory (read from the
+    /// disk cache, or computed and stored): for directions a run meets once.
+    pub fn fetch(&self, source: &Source, resolution: u32) -> DirectionData {
         let key = RecordKey::for_source(self.hash, source.key, resolution);
         let from_disk = key
             .as_ref()
@@ -207,13 +219,32 @@ impl<'a> Directions<'a> {
                 d
             }
         };
-        let data = Arc::new(data);
-        self.memo
-            .lock()
-            .expect("memo lock")
-            .entry(id)
-            .or_insert(data)
-            .clone()
+        data
+    }
+
+    /// The sensors' responses to one source, read from the disk cache without decoding the
+    /// projection (or computed and stored with it when missing); not kept in memory.
+    pub fn sensor_responses(&self, source: &Source, resolution: u32) -> Vec<NodeResponse> {
+        let cached = RecordKey::for_source(self.hash, source.key, resolution)
+            .and_then(|k| self.store.get(&k))
+            .and_then(|r| {
+                r.f64s(TAG_SENSORS)
+                    .ok()
+                    .and_then(|f| unflatten(f, self.scene.sensors.len()))
+            });
+        match cached {
+            Some(s) => {
+                self.from_cache.fetch_add(1, Ordering::Relaxed);
+                s
+            }
+            None => self.fetch(source, resolution).sensors,
+        }
+    }
+
+    /// The hash of what these directions depend on (geometry, glazing, sensors,
+    /// parameters): the `scene` of their record keys.
+    pub fn hash(&self) -> SceneHash {
+        self.hash
     }
 
     fn compute(&self, source: &Source, resolution: u32) -> DirectionData {
@@ -255,27 +286,32 @@ impl<'a> Directions<'a> {
     /// is not ours) if its sections do not fit this scene.
     fn decode(&self, r: &MappedRecord) -> Option<DirectionData> {
         let record = cache::decode_direction(r).ok()?;
-        let flat = r.f64s(TAG_SENSORS).ok()?;
-        if flat.len() != PER_SENSOR * self.scene.sensors.len() {
-            return None;
-        }
-        let sensors = flat
-            .chunks_exact(PER_SENSOR)
-            .map(|c| {
-                let mut n = NodeResponse::default();
-                for k in 0..4 {
-                    n.child[k] = Rgb::new(c[3 * k], c[3 * k + 1], c[3 * k + 2]);
-                    n.uncertainty[k] = c[12 + k];
-                }
-                n
-            })
-            .collect();
+        let sensors = unflatten(r.f64s(TAG_SENSORS).ok()?, self.scene.sensors.len())?;
         Some(DirectionData {
             record,
             sensors,
             rays: 0,
         })
     }
+}
+
+/// The responses of `n` sensors from their flat cached form; `None` when it does not fit.
+fn unflatten(flat: &[f64], n: usize) -> Option<Vec<NodeResponse>> {
+    if flat.len() != PER_SENSOR * n {
+        return None;
+    }
+    Some(
+        flat.chunks_exact(PER_SENSOR)
+            .map(|c| {
+                let mut r = NodeResponse::default();
+                for k in 0..4 {
+                    r.child[k] = Rgb::new(c[3 * k], c[3 * k + 1], c[3 * k + 2]);
+                    r.uncertainty[k] = c[12 + k];
+                }
+                r
+            })
+            .collect(),
+    )
 }
 
 fn flatten(sensors: &[NodeResponse]) -> Vec<f64> {

@@ -4,7 +4,8 @@
 //!
 //! Modules in pipeline order: the run's knobs ([`config`]); the step's stages — sky and
 //! sources ([`sky`]), per-direction data ([`directions`]), the operator ([`operator`]),
-//! direct light onto the mesh and the sensors ([`direct`]), the stated error
+//! direct light onto the mesh and the sensors ([`direct`]), daylight coefficients for
+//! annual steps ([`coefficients`]), the stated error
 //! ([`estimate`]) — and the step that runs them ([`step`]); then the sequences built from
 //! it ([`instant`], [`df`], [`convergence`], [`annual`] with its [`surfaces`] export) and
 //! their [`report`].
@@ -14,6 +15,7 @@ pub mod sky;
 pub mod directions;
 pub mod operator;
 pub mod direct;
+pub mod coefficients;
 pub mod estimate;
 pub mod step;
 pub mod instant;

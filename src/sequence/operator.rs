@@ -20,7 +20,9 @@ const TAG_PARTS: u32 = FIRST_USER_TAG + 0x100;
 /// rebuilt rather than reused. 2: glazing reflects specularly (Radiance `glass`).
 pub const OPERATOR_VERSION: u32 = 2;
 
-fn key(scene: &Scene, params: &TransportParams) -> RecordKey {
+/// The cache key of `scene`'s operator for `params` (what its daylight coefficients are
+/// keyed by, with the reflectances).
+pub fn key(scene: &Scene, params: &TransportParams) -> RecordKey {
     let mut extra = b"transport operator v".to_vec();
     extra.extend_from_slice(&OPERATOR_VERSION.to_le_bytes());
     extra.extend(serde_json::to_vec(params).expect("parameters serialise"));

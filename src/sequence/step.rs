@@ -16,6 +16,7 @@
 //! What a run reuses across its steps (directions, the operator, per-direction mesh
 //! weights) lives in the [`Engine`]; what one step produces is a [`Step`].
 
+use super::coefficients::Coefficients;
 use super::config::{Quality, SkySpec};
 use super::direct::{mesh_irradiance, sensors_from_responses, MeshMemo, MeshWeights};
 use super::directions::{DirectionData, Directions};
@@ -29,7 +30,7 @@ use crate::hierarchy::Hierarchy;
 use crate::photometry::Rgb;
 use crate::projection::DirectionRecord;
 use crate::radiosity::TransportState;
-use crate::radiosity::{DirectionResponse, SensorResponse, Transport, TransportSensor};
+use crate::radiosity::{Transport, TransportSensor};
 use crate::scene::Scene;
 use crate::site::solar_position::solar_position;
 use crate::sky::Sky;
@@ -47,8 +48,8 @@ pub struct EngineOptions {
     /// Per-group surface irradiance and transmitted power (`surfaces.csv`): needs the mesh
     /// solution, so every step solves forward.
     pub surfaces: bool,
-    /// Memory allowed for adjoint sensor responses (daylight coefficients), bytes; 0 makes
-    /// every step a warm-started forward solve.
+    /// Memory allowed for adjoint sensor responses while daylight coefficients are
+    /// computed ([`Engine::prepare`]), bytes.
     pub response_max_bytes: u64,
 }
 
@@ -76,6 +77,9 @@ pub struct Step {
     /// The refined element hierarchy and each element's direct irradiance, when asked
     /// (`detail`).
     pub elements: Option<(Hierarchy, DirectIrradiance)>,
+    /// Per sensor, the stated error of interpolating the sun's interreflected light on
+    /// the sun grid, lux (included in `lux_err`; empty for forward steps).
+    pub sun_interpolation_err: Vec<f64>,
     /// The step's report: sun, counts, stage times, what was skipped, the solve.
     pub report: Report,
 }
@@ -91,9 +95,6 @@ struct Interreflected {
     surfaces: Vec<f64>,
 }
 
-/// Memo of per-direction daylight coefficients.
-type DcMemo = Mutex<HashMap<(SourceKey, u32), Arc<DirectionResponse>>>;
-
 /// What a run keeps across its steps: the per-direction data (fine, and one level
 /// coarser for the error estimate), the interreflection operator, and per-direction mesh
 /// weights and daylight coefficients.
@@ -104,10 +105,34 @@ pub struct Engine<'a> {
     operator: Option<Transport>,
     operator_from_cache: bool,
     setup: StageTimes,
-    response: Option<SensorResponse>,
     surfaces: Option<SurfaceMap>,
     mesh_memo: MeshMemo,
-    dc_memo: DcMemo,
+    tracer: Arc<Tracer>,
+    store: &'a Store,
+    opts: EngineOptions,
+    /// Daylight coefficients and the sun cells' sensor responses ([`Engine::prepare`]).
+    coefficients: Option<(Coefficients, Directions<'a>)>,
+    /// Skies [`Engine::prepare`] built, each taken by its step.
+    skies: Mutex<HashMap<SkyKey, Sky>>,
+}
+
+/// A step's time and sky parameters, exactly.
+type SkyKey = (i64, u32, [u64; 3]);
+
+fn sky_key(at: &StepTime, spec: &SkySpec) -> SkyKey {
+    let (a, b, c) = match *spec {
+        SkySpec::Perez {
+            dni,
+            dhi,
+            dew_point_c,
+        } => (dni, dhi, dew_point_c.unwrap_or(f64::NAN)),
+        _ => return (i64::MIN, 0, [0; 3]),
+    };
+    (
+        at.utc.timestamp(),
+        at.utc.timestamp_subsec_nanos(),
+        [a.to_bits(), b.to_bits(), c.to_bits()],
+    )
 }
 
 /// Whether `scene` reflects or emits anything (otherwise there is no interreflection).
@@ -145,27 +170,63 @@ impl<'a> Engine<'a> {
             (Some(op), true) => Some(SurfaceMap::new(scene, op)),
             _ => None,
         };
-        // Surfaces read the mesh solution, which only forward solves have.
-        let t = std::time::Instant::now();
-        let response = operator
-            .as_ref()
-            .filter(|_| surfaces.is_none())
-            .and_then(|op| op.response(opts.response_max_bytes));
-        if response.is_some() {
-            setup.add("sensor_response", t.elapsed().as_secs_f64());
-        }
         Engine {
             scene,
             dirs: Directions::new(scene, quality, store, tracer.clone()),
-            coarse: Directions::sensors_only(scene, &quality.coarser(), store, tracer),
+            coarse: Directions::sensors_only(scene, &quality.coarser(), store, tracer.clone()),
             operator,
             operator_from_cache,
             setup,
-            response,
             surfaces,
             mesh_memo: MeshMemo::default(),
-            dc_memo: DcMemo::default(),
+            tracer,
+            store,
+            opts: *opts,
+            coefficients: None,
+            skies: Mutex::new(HashMap::new()),
         }
+    }
+
+    /// Switches the steps to daylight coefficients ([`super::coefficients`]) for the
+    /// steps `steps` (each step's time and sky; a later step with a sky node or sun
+    /// direction none of these had panics). Declined (returns false, steps keep the
+    /// forward solve) when the scene has no interreflection, when surface output needs
+    /// each step's mesh solution, or when something emits.
+    pub fn prepare(&mut self, steps: &[(StepTime, SkySpec)]) -> bool {
+        let Some(op) = &self.operator else {
+            return false;
+        };
+        if self.surfaces.is_some() || op.emits() || self.scene.sensors.is_empty() {
+            return false;
+        }
+        let (c, skies) = Coefficients::prepare(
+            self.scene,
+            &self.dirs,
+            op,
+            steps,
+            self.opts.response_max_bytes,
+        );
+        self.setup.add("daylight_coefficients", c.stats.seconds);
+        let mut memo = self.skies.lock().expect("sky memo");
+        for ((at, spec), sky) in steps.iter().zip(skies) {
+            if let Some(sky) = sky {
+                memo.insert(sky_key(at, spec), sky);
+            }
+        }
+        drop(memo);
+        let sun = Directions::sensors_only(
+            self.scene,
+            self.dirs.quality(),
+            self.store,
+            self.tracer.clone(),
+        );
+        self.coefficients = Some((c, sun));
+        true
+    }
+
+    /// What preparing the daylight coefficients did, when the steps use them.
+    pub fn coefficient_stats(&self) -> Option<super::coefficients::CoefficientStats> {
+        self.coefficients.as_ref().map(|c| c.0.stats)
     }
 
     /// The per-direction data at the run's quality (counters, cache store).
@@ -193,9 +254,9 @@ impl<'a> Engine<'a> {
         &self.setup
     }
 
-    /// Gauss–Seidel sweeps of the adjoint responses' solves (0 without them).
+    /// Gauss–Seidel sweeps of the daylight coefficients' adjoint solves (0 without them).
     pub fn response_sweeps(&self) -> u64 {
-        self.response.as_ref().map_or(0, |r| r.sweeps)
+        self.coefficient_stats().map_or(0, |s| s.sweeps)
     }
 
     /// The surface map, when the run asked for surface output.
@@ -203,18 +264,19 @@ impl<'a> Engine<'a> {
         self.surfaces.as_ref()
     }
 
-    /// How the steps' interreflection is computed: "adjoint", "forward" or "none".
+    /// How the steps' interreflection is computed: "daylight coefficients", "forward" or
+    /// "none".
     pub fn interreflection(&self) -> &'static str {
-        match (&self.operator, &self.response) {
+        match (&self.operator, &self.coefficients) {
             (None, _) => "none",
-            (Some(_), Some(_)) => "adjoint",
+            (Some(_), Some(_)) => "daylight coefficients",
             (Some(_), None) => "forward",
         }
     }
 
     /// Whether steps are independent (daylight coefficients) rather than warm-started.
     pub fn steps_are_independent(&self) -> bool {
-        self.response.is_some()
+        self.coefficients.is_some()
     }
 
     /// One timestep at `at` under the sky `spec`, warm-started from `previous` (the last
@@ -234,7 +296,18 @@ impl<'a> Engine<'a> {
         let sun = times.time("solar_position", || {
             solar_position(at.utc, &self.scene.site)
         });
+        let prepared = (sky_key(at, spec).0 != i64::MIN)
+            .then(|| {
+                self.skies
+                    .lock()
+                    .expect("sky memo")
+                    .remove(&sky_key(at, spec))
+            })
+            .flatten();
         let sky = times.time("sky", || {
+            if let Some(s) = prepared {
+                return Ok(s);
+            }
             build_sky(
                 spec,
                 &sun,
@@ -279,6 +352,41 @@ impl<'a> Engine<'a> {
         let s = times.time("sources", || sources_for(sky, self.dirs.quality()));
         self.note_sources(&s, &mut report);
         let sources = s.sources;
+        if let (Some((c, sun_dirs)), Some(op), false) = (&self.coefficients, &self.operator, detail)
+        {
+            // 3–7 by daylight coefficients: sums over the cut, no projection, no solve.
+            let (sensors, interp) = times.time("coefficients", || {
+                let coarse = sources_for(sky, self.coarse.quality()).sources;
+                let sun_fine = self.sun_lux(sun_dirs, &sources);
+                let sun_coarse = self.sun_lux(&self.coarse, &coarse);
+                c.evaluate(
+                    &sources,
+                    &coarse,
+                    &sun_fine,
+                    &sun_coarse,
+                    &self.coarse,
+                    op.params.tolerance,
+                )
+            });
+            report.error_model = ERROR_MODEL.into();
+            report.max_lux_err = sensors.iter().map(|v| v.lux_err).fold(0.0, f64::max);
+            report.max_relative_err = sensors
+                .iter()
+                .filter_map(|v| v.relative_error(1.0))
+                .fold(0.0, f64::max);
+            report.warnings.extend(sky.warnings.iter().cloned());
+            report.stage_seconds = times;
+            return Step {
+                sensors,
+                state: None,
+                surfaces: Vec::new(),
+                sky: None,
+                sources,
+                elements: None,
+                sun_interpolation_err: interp,
+                report,
+            };
+        }
         // 3. Directions: projections and sensor responses, cached.
         let data = times.time("directions", || self.dirs.get_all(&sources));
         let records: Vec<&DirectionRecord> = data.iter().map(|d| &d.record).collect();
@@ -308,6 +416,7 @@ impl<'a> Engine<'a> {
             sky: None,
             sources,
             elements,
+            sun_interpolation_err: Vec::new(),
             report,
         }
     }
@@ -325,20 +434,8 @@ impl<'a> Engine<'a> {
     ) -> Interreflected {
         let scene = self.scene;
         let mut out = Interreflected::default();
-        match (&self.operator, &self.response) {
-            (Some(op), Some(resp)) => {
-                out.sensors = times.time("interreflection", || {
-                    let mut acc = resp.start();
-                    for (src, d) in sources.iter().zip(data) {
-                        let dc = self.coefficients(op, resp, src, &d.record);
-                        resp.add(&mut acc, src.normal_irradiance, &dc);
-                    }
-                    resp.sensors_of(&acc)
-                });
-                // The responses were solved to the operator's tolerance.
-                out.iteration_error = op.params.tolerance;
-            }
-            (Some(op), None) => {
+        match &self.operator {
+            Some(op) => {
                 let weights = times.time("transfer_mesh", || self.mesh_weights(op, sources, data));
                 let e = mesh_irradiance(op.rows(), sources, &weights);
                 let (next, rep) = times.time("interreflection", || op.solve(&e, previous));
@@ -359,7 +456,7 @@ impl<'a> Engine<'a> {
                 out.iteration_error = rep.iteration_error;
                 out.state = Some(next);
             }
-            (None, _) => {
+            None => {
                 report.skipped.push(if needs_interreflection(scene) {
                     "interreflection: no sensors and no surface output need it".into()
                 } else {
@@ -474,27 +571,27 @@ impl<'a> Engine<'a> {
             .collect()
     }
 
-    /// Daylight coefficients of one direction (memoised per run).
-    fn coefficients(
-        &self,
-        op: &Transport,
-        resp: &SensorResponse,
-        src: &Source,
-        record: &DirectionRecord,
-    ) -> Arc<DirectionResponse> {
-        let res = self.dirs.quality().projection.resolution_for(src.is_sun());
-        let key = (src.key, res);
-        if let Some(d) = self.dc_memo.lock().expect("dc memo").get(&key) {
-            return d.clone();
-        }
-        let w = self.mesh_memo.weights(self.scene, op, src, res, record);
-        let d = Arc::new(resp.direction(op, &w));
-        self.dc_memo
-            .lock()
-            .expect("dc memo")
-            .entry(key)
-            .or_insert(d)
-            .clone()
+    /// Each sensor's direct sun (lux) from the sun among `sources` (none: zeros), through
+    /// `dirs`' cached sensor responses of its snapped cell, τ at the true angle.
+    fn sun_lux(&self, dirs: &Directions, sources: &[Source]) -> Vec<f64> {
+        let k = self.scene.sensors.len();
+        let Some(src) = sources.iter().find(|s| matches!(s.key, SourceKey::Sun(_))) else {
+            return vec![0.0; k];
+        };
+        let res = dirs.quality().projection.resolution_for(true);
+        let d = dirs.fetch(src, res);
+        (0..k)
+            .map(|i| {
+                let cos = self.scene.sensors[i].normal.dot(src.true_direction);
+                if cos > 0.0 {
+                    crate::photometry::lux(
+                        src.normal_irradiance * dirs.sun_transmission(i, src, &d.sensors[i]),
+                    ) * cos
+                } else {
+                    0.0
+                }
+            })
+            .collect()
     }
 }
 
@@ -512,7 +609,7 @@ fn count_sources(sources: &[Source], records: &[&DirectionRecord], scene: &Scene
         match s.key {
             SourceKey::Sky(_) => c.sky_sources += 1,
             SourceKey::Ground(_) => c.ground_sources += 1,
-            SourceKey::Sun(_) => c.sun_sources += 1,
+            SourceKey::Sun(_) | SourceKey::SunGrid(_) => c.sun_sources += 1,
         }
         let px = r.stats.width as u64 * r.stats.height as u64;
         c.ldi_pixels += px;

@@ -14,8 +14,8 @@
 //! ε ≥ 12); Δ is floored at 0.01 before ln Δ (gendaymtx would take ln 0 for DHI → 0).
 
 use super::{
-    check_ground_reflectance, check_irradiance, check_sun_direction, ground_radiance,
-    horizontal_irradiance, Sky, SkyDistribution, Sun, MIN_COS_ZENITH,
+    check_ground_reflectance, check_irradiance, check_sun_direction, ground_radiance, Sky,
+    SkyDistribution, Sun, MIN_COS_ZENITH,
 };
 use crate::photometry::{Rgb, EFFICACY_LM_PER_W};
 use crate::{Error, Result};
@@ -222,6 +222,44 @@ impl PerezParameters {
     }
 }
 
+impl PerezParameters {
+    /// ∫ lv cos ζ dω over the upper hemisphere for the sun at unit `sun_dir` (sr), on the
+    /// grid of [`crate::sky::HORIZONTAL_QUADRATURE`] with its azimuths counted from the
+    /// sun's: the integrand is then mirror-symmetric in azimuth, so each ring evaluates
+    /// half its cells, and the gradation factor is evaluated once per ring. The same rule
+    /// as [`crate::sky::integrate_horizontal`] (rings uniform in zenith angle with exact
+    /// projected-solid-angle weights), about 4× cheaper: this runs once per timestep.
+    pub fn horizontal_integral(&self, sun_dir: DVec3) -> f64 {
+        let (n_theta, n_phi) = crate::sky::HORIZONTAL_QUADRATURE;
+        let half = n_phi / 2;
+        let dphi = std::f64::consts::TAU / n_phi as f64;
+        let cos_dphi: Vec<f64> = (0..half).map(|j| ((j as f64 + 0.5) * dphi).cos()).collect();
+        let (czs, szs) = (sun_dir.z, (1.0 - sun_dir.z * sun_dir.z).max(0.0).sqrt());
+        let floor = if self.b > 0.0 {
+            POSITIVE_B_MIN_COS_ZENITH
+        } else {
+            MIN_COS_ZENITH
+        };
+        let dtheta = std::f64::consts::FRAC_PI_2 / n_theta as f64;
+        let mut total = 0.0;
+        for i in 0..n_theta {
+            let (lo, hi) = (i as f64 * dtheta, (i + 1) as f64 * dtheta);
+            let weight = 0.5 * (lo.cos().powi(2) - hi.cos().powi(2)) * dphi;
+            let (sz, cz) = ((i as f64 + 0.5) * dtheta).sin_cos();
+            let grad = 1.0 + self.a * (self.b / cz.max(floor)).exp();
+            let (p, q) = (cz * czs, sz * szs);
+            let mut ring = 0.0;
+            for &cd in &cos_dphi {
+                let cg = (p + q * cd).clamp(-1.0, 1.0);
+                let v = grad * (1.0 + self.c * (self.d * cg.acos()).exp() + self.e * cg * cg);
+                ring += v.max(0.0);
+            }
+            total += 2.0 * ring * weight;
+        }
+        total
+    }
+}
+
 /// The normalised Perez distribution.
 struct PerezDistribution {
     params: PerezParameters,
@@ -302,7 +340,7 @@ pub fn sky(
             sun_dir,
             scale: 1.0,
         };
-        let e_unit = horizontal_irradiance(&dist).x;
+        let e_unit = dist.params.horizontal_integral(sun_dir);
         if e_unit.is_finite() && e_unit > 0.0 {
             dist.scale = e_vd / EFFICACY_LM_PER_W / e_unit;
         } else {
@@ -511,6 +549,31 @@ mod tests {
                 "ground",
             );
             assert_eq!(s.ground_radiance.x, s.ground_radiance.z);
+        }
+    }
+
+    #[test]
+    fn per_ring_integral_matches_a_fine_quadrature() {
+        // The timestep's normalisation (sun-aligned, half rings) against the generic rule at
+        // 4× the resolution in each direction: within its 2e-4 share of the stated error.
+        for (dni, dhi, alt, az) in [
+            (800.0, 90.0, 40.0, 150.0),
+            (100.0, 300.0, 5.0, 80.0),
+            (0.0, 200.0, 70.0, 200.0),
+            (600.0, 120.0, 3.0, 250.0),
+            (30.0, 40.0, 0.5, 250.0),
+        ] {
+            let d = direction_from_alt_az(alt, az);
+            let p = parameters(dni, dhi, d.z.acos(), 172, 10.0);
+            let fine = crate::sky::integrate_horizontal(
+                |v| Rgb::splat(p.relative_luminance(v.z, v.dot(d).clamp(-1.0, 1.0).acos())),
+                512,
+                1024,
+            )
+            .x;
+            let fast = p.horizontal_integral(d);
+            assert!(fine > 0.0, "{alt}°: a dark sky tests nothing");
+            assert!((fast / fine - 1.0).abs() < 2e-4, "{alt}°: {fast} vs {fine}");
         }
     }
 

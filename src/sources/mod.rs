@@ -5,9 +5,11 @@
 
 pub mod direction_key;
 pub mod subdivision;
+pub mod sun_grid;
 
 pub use direction_key::{SkyNodeKey, SunKey};
 pub use subdivision::{sky_sources, sun_source, SkyParams};
+pub use sun_grid::SunGrid;
 
 use crate::photometry::Rgb;
 use glam::DVec3;
@@ -21,6 +23,8 @@ pub enum SourceKey {
     Ground(SkyNodeKey),
     /// The sun, snapped.
     Sun(SunKey),
+    /// A vertex of the sun's interpolation grid ([`SunGrid`]): row `band`, column `index`.
+    SunGrid(SunKey),
 }
 
 /// One parallel light source.
@@ -47,8 +51,8 @@ pub struct Source {
 }
 
 impl Source {
-    /// True for the sun.
+    /// True for the sun and the vertices of its interpolation grid (projected alike).
     pub fn is_sun(&self) -> bool {
-        matches!(self.key, SourceKey::Sun(_))
+        matches!(self.key, SourceKey::Sun(_) | SourceKey::SunGrid(_))
     }
 }

@@ -74,6 +74,11 @@ pub struct SkySources {
 /// Average radiance of a node: mean of the three vertices and the centre (§4). Sky nodes
 /// evaluate the sky just above the horizon for vertices on it.
 fn node_radiance(sky: &Sky, key: SkyNodeKey, v: &[DVec3; 3]) -> (Rgb, f64, [Rgb; 4]) {
+    node_radiance_split(sky, key, &spherical_triangle::split(v[0], v[1], v[2]))
+}
+
+/// [`node_radiance`] from the node's four children (`split` of its vertices).
+fn node_radiance_split(sky: &Sky, key: SkyNodeKey, kids: &[[DVec3; 3]; 4]) -> (Rgb, f64, [Rgb; 4]) {
     if !key.is_sky() {
         return (sky.ground_radiance, 0.0, [sky.ground_radiance; 4]);
     }
@@ -86,7 +91,6 @@ fn node_radiance(sky: &Sky, key: SkyNodeKey, v: &[DVec3; 3]) -> (Rgb, f64, [Rgb;
     };
     // Centres of the four children: a 4-point centroid rule (same cost as the paper's
     // vertices + centre, smaller error on curved radiance; see docs/design.md).
-    let kids = spherical_triangle::split(v[0], v[1], v[2]);
     let l = kids.map(|k| sky.radiance(lift(spherical_triangle::centre(k[0], k[1], k[2]))));
     let w = kids.map(|k| spherical_triangle::solid_angle(k[0], k[1], k[2]));
     let total: f64 = w.iter().sum();
@@ -138,10 +142,15 @@ pub fn sky_sources(sky: &Sky, params: &SkyParams) -> SkySources {
     if reference <= 0.0 || !reference.is_finite() {
         return out;
     }
-    let mut stack: Vec<SkyNodeKey> = (0..8u8).rev().map(SkyNodeKey::root).collect();
-    while let Some(key) = stack.pop() {
-        let v = key.vertices();
-        let (l, variation, children) = node_radiance(sky, key, &v);
+    // Each node carries its vertices down (the same splits `SkyNodeKey::vertices` repeats
+    // from the root, so bit-identical, without the repetition).
+    let mut stack: Vec<(SkyNodeKey, [DVec3; 3])> = (0..8u8)
+        .rev()
+        .map(|b| (SkyNodeKey::root(b), SkyNodeKey::root(b).vertices()))
+        .collect();
+    while let Some((key, v)) = stack.pop() {
+        let kids = spherical_triangle::split(v[0], v[1], v[2]);
+        let (l, variation, children) = node_radiance_split(sky, key, &kids);
         let omega = spherical_triangle::solid_angle(v[0], v[1], v[2]);
         let depth = key.depth();
         let split = if key.is_sky() {
@@ -155,7 +164,7 @@ pub fn sky_sources(sky: &Sky, params: &SkyParams) -> SkySources {
         };
         if split {
             for k in (0..4).rev() {
-                stack.push(key.child(k));
+                stack.push((key.child(k), kids[k as usize]));
             }
             continue;
         }
@@ -274,6 +283,13 @@ mod tests {
             .sources
             .iter()
             .any(|s| matches!(s.key, SourceKey::Ground(_))));
+        // Vertices carried down the subdivision are those the key gives from the root.
+        for s in &src.sources {
+            let (SourceKey::Sky(k) | SourceKey::Ground(k)) = s.key else {
+                panic!("a sky source")
+            };
+            assert_eq!(s.vertices, Some(k.vertices()));
+        }
     }
 
     #[test]

@@ -1,0 +1,474 @@
+//! Stage 5 of annual steps by daylight coefficients: everything after the sky is linear in
+//! its radiance, and the sources are nodes of a tree fixed in the world frame, so each
+//! node's light at every sensor (direct, and interreflected through the global-line
+//! operator) is computed once per geometry and materials, cached, and a step's sensor
+//! values become sums over the step's adaptive cut of the node's radiance × its
+//! coefficients. The cut, its accuracy and its error terms are those of a forward step;
+//! only the arithmetic moves.
+//!
+//! * **Sky and ground nodes.** Per node and sensor: the direct response of each of the
+//!   node's four children (lux per W·sr⁻¹·m⁻² of the child's radiance), their sum and
+//!   their visibility uncertainties (from the cached direction record), and the
+//!   interreflected illuminance per W/m² of normal irradiance in each independent part
+//!   and one mesh level coarser ([`Transport::grey_coefficients`]). A step's noise and
+//!   discretisation estimates come from the same coefficients (their spread over parts,
+//!   and the coarse level), not from extra solves.
+//! * **The sun.** Its direct light stays exact: the sensors' cached visibility of the
+//!   step's snapped sun cell, with glazing τ at the true angle. Its interreflected light
+//!   is interpolated bilinearly between the coefficients of the four vertices of the
+//!   [`SunGrid`] cell around the true direction. The interpolation error is stated as
+//!   the largest difference between the interpolated value and a corner's value, per
+//!   sensor, and added to `lux_err`: the true value of a function monotone across the
+//!   cell lies within its corners' range.
+//! * **Grey.** Coefficients are illuminance, exact for grey sources (Perez skies, their
+//!   ground glow and the sun, which is what annual runs use).
+//! * **Cache.** A node's interreflected coefficients are a record keyed by the node, the
+//!   operator's key, the mesh's reflectances and the direction's scene hash: a
+//!   reflectance change recomputes them and reuses the projections and the operator; a
+//!   weather or site change reuses everything.
+
+use super::config::{Quality, SkySpec};
+use super::direct::mesh_weights;
+use super::directions::Directions;
+use super::estimate::SensorValue;
+use super::sky::{build_sky, sources_for};
+use super::step::StepTime;
+use crate::cache::{self, RecordKey, SceneHash, Section, FIRST_USER_TAG};
+use crate::photometry::{from_lux, lux, Rgb};
+use crate::radiosity::{Transport, TransportSensor};
+use crate::scene::Scene;
+use crate::sensors::SensorDirect;
+use crate::site::solar_position::solar_position;
+use crate::sky::Sky;
+use crate::sources::{Source, SourceKey, SunGrid};
+use chrono::Datelike;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::collections::{BTreeMap, HashMap};
+use std::sync::Mutex;
+use std::time::Instant;
+
+/// Section tag of a coefficient record: (parts + 1) × sensors f32.
+const TAG_VALUES: u32 = FIRST_USER_TAG;
+/// Version of what a coefficient record holds, hashed into its key.
+const COEFFICIENTS_VERSION: u32 = 1;
+/// Direct rows per node: 4 child responses, their sum, 4 uncertainties.
+const DIRECT_ROWS: usize = 9;
+/// Directions whose mesh weights are held at once while coefficients are computed.
+const BATCH: usize = 512;
+
+/// One node's per-sensor data, rows of `sensors` f32 each.
+#[derive(Clone, Debug, Default)]
+struct NodeData {
+    /// [`DIRECT_ROWS`] rows (empty for sun-grid vertices).
+    direct: Vec<f32>,
+    /// parts rows of fine interreflected lux per W/m², then the coarse mean.
+    indirect: Vec<f32>,
+}
+
+/// What preparing the coefficients did (`report.json`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct CoefficientStats {
+    /// Sky and ground nodes the run's steps use.
+    pub nodes: usize,
+    /// Sun-grid vertices the site's sun visits.
+    pub sun_grid_vertices: usize,
+    /// Nodes and vertices whose interreflected coefficients were computed now.
+    pub computed: usize,
+    /// ... read from the cache.
+    pub from_cache: usize,
+    /// Sensors per adjoint block (the memory budget's choice).
+    pub block_sensors: usize,
+    /// Gauss–Seidel sweeps of the adjoint solves.
+    pub sweeps: u64,
+    /// Bytes the coefficients take in memory.
+    pub bytes: u64,
+    /// Sun-grid spacing, degrees.
+    pub sun_grid_deg: f64,
+    /// Wall time of the preparation, s.
+    pub seconds: f64,
+}
+
+/// The daylight coefficients of a run's steps (see the module doc).
+pub struct Coefficients {
+    sensors: usize,
+    parts: usize,
+    grid: SunGrid,
+    nodes: HashMap<SourceKey, NodeData>,
+    /// Coarser level's nodes: 4 rows of child responses.
+    coarse: Mutex<HashMap<SourceKey, std::sync::Arc<Vec<f32>>>>,
+    /// What the coefficient records hash (directions, operator, reflectances).
+    hash: SceneHash,
+    /// Preparation counters.
+    pub stats: CoefficientStats,
+}
+
+/// The sky of one step and its sources at the run's quality (`None` for a sky that
+/// cannot be built: the step itself reports why).
+fn step_sources(
+    scene: &Scene,
+    quality: &Quality,
+    at: &StepTime,
+    spec: &SkySpec,
+) -> Option<(Sky, Vec<Source>)> {
+    let sun = solar_position(at.utc, &scene.site);
+    let sky = build_sky(spec, &sun, at.local.ordinal(), scene.ground_reflectance).ok()?;
+    let s = sources_for(&sky, quality).sources;
+    Some((sky, s))
+}
+
+/// The grey value of a grey RGB quantity.
+fn g(v: Rgb) -> f32 {
+    debug_assert!(
+        (v.x - v.y).abs() <= 1e-9 * v.x.abs().max(1e-300)
+            && (v.x - v.z).abs() <= 1e-9 * v.x.abs().max(1e-300),
+        "daylight coefficients need grey sources: {v:?}"
+    );
+    v.y as f32
+}
+
+/// Direct rows of a node from its cached sensor responses.
+fn direct_rows(resp: &[crate::sensors::NodeResponse], k: usize) -> Vec<f32> {
+    let mut d = vec![0f32; DIRECT_ROWS * k];
+    for (s, r) in resp.iter().enumerate() {
+        let mut sum = 0.0;
+        for c in 0..4 {
+            let l = lux(r.child[c]);
+            d[c * k + s] = l as f32;
+            sum += l;
+            d[(5 + c) * k + s] = (lux(Rgb::ONE) * r.uncertainty[c]) as f32;
+        }
+        d[4 * k + s] = sum as f32;
+    }
+    d
+}
+
+impl Coefficients {
+    /// Prepares the coefficients every step of `steps` needs: the nodes of each step's
+    /// cut (read from the cache or computed, through `dirs` for the projections and
+    /// direct responses and `op` for the interreflection) and the sun-grid vertices
+    /// around each step's sun, with at most `max_bytes` of adjoint responses at once.
+    /// Also returns each step's sky (`None` where it cannot be built), so the steps need
+    /// not build them again.
+    pub(super) fn prepare(
+        scene: &Scene,
+        dirs: &Directions,
+        op: &Transport,
+        steps: &[(StepTime, SkySpec)],
+        max_bytes: u64,
+    ) -> (Coefficients, Vec<Option<Sky>>) {
+        let t0 = Instant::now();
+        let quality = dirs.quality();
+        let grid = SunGrid {
+            spacing_deg: quality.sun_grid_deg,
+        };
+        let k = scene.sensors.len();
+        let store = dirs.store();
+        let hash = coefficient_hash(scene, dirs, op);
+        // The sources of every step, deduplicated by key (deterministic order).
+        let per_step: Vec<(Option<Sky>, BTreeMap<SourceKey, Source>)> = steps
+            .par_iter()
+            .map(|(at, spec)| {
+                let mut m = BTreeMap::new();
+                let Some((sky, s)) = step_sources(scene, quality, at, spec) else {
+                    return (None, m);
+                };
+                {
+                    for src in s {
+                        match src.key {
+                            SourceKey::Sun(_) => {
+                                for (v, _) in grid.corners(src.true_direction) {
+                                    let gs = grid.source(v);
+                                    m.insert(gs.key, gs);
+                                }
+                            }
+                            key => {
+                                m.insert(key, src);
+                            }
+                        }
+                    }
+                }
+                (Some(sky), m)
+            })
+            .collect();
+        let mut wanted: BTreeMap<SourceKey, Source> = BTreeMap::new();
+        let mut skies = Vec::with_capacity(steps.len());
+        for (sky, m) in per_step {
+            wanted.extend(m);
+            skies.push(sky);
+        }
+        let mut stats = CoefficientStats {
+            nodes: wanted.values().filter(|s| !s.is_sun()).count(),
+            sun_grid_vertices: wanted.values().filter(|s| s.is_sun()).count(),
+            sun_grid_deg: grid.spacing_deg,
+            ..CoefficientStats::default()
+        };
+        let parts = op.params.parts.max(2) as usize;
+        let list: Vec<Source> = wanted.into_values().collect();
+        // Grid vertices feed only the interreflection mesh (0.25 m² rows, not shadows on
+        // sensors), so they are projected at the sky nodes' resolution.
+        let res_of = |src: &Source| {
+            let sun = matches!(src.key, SourceKey::Sun(_));
+            quality.projection.resolution_for(sun)
+        };
+        // Cached coefficients, with the direct rows from the direction's sensor responses.
+        let mut data: Vec<Option<NodeData>> = list
+            .par_iter()
+            .map(|src| {
+                let key = record_key(hash, dirs, src, res_of(src))?;
+                let v = store.get(&key)?.section::<f32>(TAG_VALUES).ok()?.to_vec();
+                if v.len() != (parts + 1) * k {
+                    return None;
+                }
+                let direct = if src.is_sun() {
+                    Vec::new()
+                } else {
+                    direct_rows(&dirs.sensor_responses(src, res_of(src)), k)
+                };
+                Some(NodeData {
+                    direct,
+                    indirect: v,
+                })
+            })
+            .collect();
+        let todo: Vec<usize> = (0..list.len()).filter(|&i| data[i].is_none()).collect();
+        stats.from_cache = list.len() - todo.len();
+        stats.computed = todo.len();
+        if !todo.is_empty() {
+            // Sensors in blocks that fit the budget; each block's adjoint responses turn
+            // every missing direction's mesh irradiance into its coefficients.
+            let block = op.adjoint_block_size(max_bytes);
+            stats.block_sensors = block.min(k);
+            let mut fresh: Vec<NodeData> = todo
+                .iter()
+                .map(|_| NodeData {
+                    direct: Vec::new(),
+                    indirect: vec![0f32; (parts + 1) * k],
+                })
+                .collect();
+            for s0 in (0..k).step_by(block) {
+                let xb = op.adjoint_block(s0..(s0 + block).min(k));
+                stats.sweeps += xb.sweeps;
+                let w = xb.sensors.len();
+                for (ids, outs) in todo.chunks(BATCH).zip(fresh.chunks_mut(BATCH)) {
+                    ids.par_iter().zip(outs).for_each(|(&i, nd)| {
+                        let src = &list[i];
+                        let d = dirs.fetch(src, res_of(src));
+                        if s0 == 0 && !src.is_sun() {
+                            nd.direct = direct_rows(&d.sensors, k);
+                        }
+                        let v = xb.apply(op, &mesh_weights(scene, op, src, &d.record));
+                        for row in 0..=parts {
+                            nd.indirect[row * k + s0..row * k + s0 + w]
+                                .copy_from_slice(&v[row * w..(row + 1) * w]);
+                        }
+                    });
+                }
+            }
+            for (&i, nd) in todo.iter().zip(fresh) {
+                let src = &list[i];
+                if let Some(key) = record_key(hash, dirs, src, res_of(src)) {
+                    if store.is_enabled() {
+                        store.put(
+                            &key,
+                            &cache::encode(&key, &[Section::of(TAG_VALUES, &nd.indirect)]),
+                        );
+                    }
+                }
+                data[i] = Some(nd);
+            }
+        }
+        let nodes: HashMap<SourceKey, NodeData> = list
+            .iter()
+            .zip(data)
+            .map(|(src, d)| (src.key, d.expect("every direction prepared")))
+            .collect();
+        stats.bytes = nodes
+            .values()
+            .map(|n| 4 * (n.direct.len() + n.indirect.len()) as u64)
+            .sum();
+        stats.seconds = t0.elapsed().as_secs_f64();
+        let c = Coefficients {
+            sensors: k,
+            parts,
+            grid,
+            nodes,
+            coarse: Mutex::new(HashMap::new()),
+            hash,
+            stats,
+        };
+        (c, skies)
+    }
+
+    /// The record-key hash of these coefficients (directions, operator, reflectances).
+    pub fn hash(&self) -> SceneHash {
+        self.hash
+    }
+
+    /// One step's sensor values from the coefficients: `fine` and `coarse` the step's
+    /// sources at the run's quality and one level coarser, `sun_fine` / `sun_coarse` each
+    /// sensor's direct sun (lux) at both levels, `coarse_dirs` the coarser level's
+    /// directions (sensor responses only), `iteration_rel` the solves' tolerance. Returns
+    /// the values (with the sun's interpolation error in `lux_err`) and that error, lux.
+    pub(super) fn evaluate(
+        &self,
+        fine: &[Source],
+        coarse: &[Source],
+        sun_fine: &[f64],
+        sun_coarse: &[f64],
+        coarse_dirs: &Directions,
+        iteration_rel: f64,
+    ) -> (Vec<SensorValue>, Vec<f64>) {
+        let k = self.sensors;
+        let p = self.parts;
+        // Accumulators: sky, Σ L̂ × response sum, uncertainty, parts, coarse mesh.
+        let mut acc = vec![0f32; (3 + p + 1) * k];
+        let mut interp = vec![0f64; k];
+        for src in fine {
+            match src.key {
+                SourceKey::Sun(_) => {
+                    self.add_sun(src, &mut acc[3 * k..], &mut interp);
+                }
+                _ => {
+                    let nd = self.node(src);
+                    let l: [f32; 4] = src.child_radiance.map(g);
+                    let ln = g(src.radiance);
+                    let (sky, rest) = acc.split_at_mut(k);
+                    let (refsum, rest) = rest.split_at_mut(k);
+                    let (unc, ind) = rest.split_at_mut(k);
+                    let d = &nd.direct;
+                    for c in 0..4 {
+                        axpy(sky, l[c], &d[c * k..(c + 1) * k]);
+                        axpy(unc, l[c], &d[(5 + c) * k..(6 + c) * k]);
+                    }
+                    axpy(refsum, ln, &d[4 * k..5 * k]);
+                    let e = g(src.normal_irradiance);
+                    axpy(ind, e, &nd.indirect);
+                }
+            }
+        }
+        // The coarser level's direct sky.
+        let mut csky = vec![0f32; k];
+        for src in coarse.iter().filter(|s| !s.is_sun()) {
+            let d = self.coarse_node(src, coarse_dirs);
+            for c in 0..4 {
+                axpy(&mut csky, g(src.child_radiance[c]), &d[c * k..(c + 1) * k]);
+            }
+        }
+        let values = (0..k)
+            .map(|s| {
+                let sky = acc[s] as f64;
+                let fine = SensorDirect {
+                    sun: from_lux(sun_fine[s]),
+                    sky: from_lux(sky),
+                    rays: 0,
+                    visibility_err_lux: acc[2 * k + s] as f64,
+                    radiance_error: from_lux(sky - acc[k + s] as f64),
+                };
+                let coarse = SensorDirect {
+                    sun: from_lux(sun_coarse[s]),
+                    sky: from_lux(csky[s] as f64),
+                    ..SensorDirect::default()
+                };
+                let parts: Vec<Rgb> = (0..p)
+                    .map(|q| from_lux(acc[(3 + q) * k + s] as f64))
+                    .collect();
+                let ind =
+                    TransportSensor::from_parts(&parts, from_lux(acc[(3 + p) * k + s] as f64));
+                let mut v = SensorValue::estimate(&fine, &coarse, &ind, iteration_rel);
+                v.lux_err += interp[s];
+                v
+            })
+            .collect();
+        (values, interp)
+    }
+
+    /// Adds the sun's interreflected light, interpolated on the grid, to `ind` (parts
+    /// rows, then the coarse row), and its interpolation error to `interp` (lux).
+    fn add_sun(&self, src: &Source, ind: &mut [f32], interp: &mut [f64]) {
+        let k = self.sensors;
+        let p = self.parts;
+        let e = g(src.normal_irradiance);
+        let corners: Vec<(&NodeData, f32)> = self
+            .grid
+            .corners(src.true_direction)
+            .into_iter()
+            .map(|(v, w)| (self.node(&self.grid.source(v)), w as f32))
+            .collect();
+        for (nd, w) in &corners {
+            axpy(ind, e * w, &nd.indirect);
+        }
+        // Per sensor: the mean over parts at each corner against the interpolated mean.
+        let mean = |nd: &NodeData, s: usize| -> f64 {
+            (0..p).map(|q| nd.indirect[q * k + s] as f64).sum::<f64>() / p as f64
+        };
+        for (s, out) in interp.iter_mut().enumerate() {
+            let m: f64 = corners.iter().map(|(nd, w)| *w as f64 * mean(nd, s)).sum();
+            let spread = corners
+                .iter()
+                .map(|(nd, _)| (mean(nd, s) - m).abs())
+                .fold(0.0, f64::max);
+            *out = e as f64 * spread;
+        }
+    }
+
+    fn node(&self, src: &Source) -> &NodeData {
+        self.nodes.get(&src.key).unwrap_or_else(|| {
+            panic!(
+                "daylight coefficients: {:?} was not prepared (Engine::prepare must see every step)",
+                src.key
+            )
+        })
+    }
+
+    fn coarse_node(&self, src: &Source, dirs: &Directions) -> std::sync::Arc<Vec<f32>> {
+        if let Some(d) = self.coarse.lock().expect("coarse lock").get(&src.key) {
+            return d.clone();
+        }
+        let res = dirs.quality().projection.resolution_for(false);
+        let data = dirs.get(src, res);
+        let d = std::sync::Arc::new(direct_rows(&data.sensors, self.sensors));
+        self.coarse
+            .lock()
+            .expect("coarse lock")
+            .entry(src.key)
+            .or_insert(d)
+            .clone()
+    }
+}
+
+/// y += a·x (f32 lanes: the per-step cost).
+fn axpy(y: &mut [f32], a: f32, x: &[f32]) {
+    if a == 0.0 {
+        return;
+    }
+    for (y, x) in y.iter_mut().zip(x) {
+        *y += a * *x;
+    }
+}
+
+/// What coefficient records depend on: the directions' hash (geometry, glazing, sensors,
+/// projection parameters), the operator's key, and the reflectance of every mesh row.
+fn coefficient_hash(scene: &Scene, dirs: &Directions, op: &Transport) -> SceneHash {
+    let mut extra = b"daylight coefficients v".to_vec();
+    extra.extend_from_slice(&COEFFICIENTS_VERSION.to_le_bytes());
+    extra.extend_from_slice(&dirs.hash().0);
+    extra.extend_from_slice(&super::operator::key(scene, &op.params).to_bytes());
+    extra.extend_from_slice(&op.reflectance_hash());
+    extra.extend_from_slice(&(crate::radiosity::response::BLOCK as u64).to_le_bytes());
+    cache::scene_hash(scene, &dirs.quality().projection, &extra)
+}
+
+fn record_key(hash: SceneHash, dirs: &Directions, src: &Source, res: u32) -> Option<RecordKey> {
+    let own = RecordKey::for_source(dirs.hash(), src.key, res)?;
+    // The direction's own kind goes into the hash: sky, ground and grid ids may overlap.
+    let mut h = blake3::Hasher::new();
+    h.update(&hash.0);
+    h.update(&[own.kind]);
+    Some(RecordKey {
+        scene: SceneHash(*h.finalize().as_bytes()),
+        kind: cache::KIND_COEFFICIENTS,
+        direction: own.direction,
+        resolution: res,
+    })
+}
