@@ -1,7 +1,8 @@
-//! `daystep annual` end to end on the sample office (six sensors, draft quality): an
+//! `daystep annual` end to end on the sample office (five sensors, draft quality): an
 //! interrupted and resumed run (and one cut mid-line) writes the same bytes as an
-//! uninterrupted one; three shards merged equal one run; a day's steps agree with
-//! independent cold instants within their stated errors.
+//! uninterrupted one; three shards merged equal one run, and so do four shard processes
+//! running at once over one cache folder; a day's steps agree with independent cold
+//! instants within their stated errors.
 
 use crate::util::DRAFT_STATED_ERROR_CAP;
 use daystep::cache::{Store, DEFAULT_MAX_BYTES};
@@ -151,6 +152,129 @@ fn resumed_and_sharded_runs_equal_one_run() {
     for f in OUTPUTS {
         assert_eq!(read(&one, f), read(&merged, f), "{f} after merge");
     }
+}
+
+/// The cache counters of a run's `report.json`: (rebuilds, write failures, writes).
+fn cache_counters(out: &Path) -> (u64, u64, u64) {
+    let report: serde_json::Value = serde_json::from_slice(&read(out, "report.json")).unwrap();
+    let c = &report["cache"];
+    let n = |f: &str| {
+        c[f].as_u64()
+            .unwrap_or_else(|| panic!("cache.{f} in {report}"))
+    };
+    (n("rebuilds"), n("write_failures"), n("writes"))
+}
+
+/// The record files of a cache folder.
+fn record_names(cache: &Path) -> std::collections::BTreeSet<String> {
+    std::fs::read_dir(cache)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".dsr"))
+        .collect()
+}
+
+#[test]
+fn four_concurrent_shard_processes_merge_to_one_run() {
+    // What docs/cluster.md promises of a job array: four `annual --shard k/4` processes
+    // started at once over one empty cache folder, merged with `daystep merge`, write the
+    // bytes of one unsharded run that had a cache folder of its own.
+    use std::process::{Command, Stdio};
+    let t0 = std::time::Instant::now();
+    let d = tempfile::tempdir().unwrap();
+    let scene = small_office(d.path());
+    let weather = d.path().join("weather.epw");
+    let shared = d.path().join("shared-cache");
+    let own = d.path().join("own-cache");
+    // Five days: shard 1 gets the first and the fifth, shards 2 to 4 one each.
+    let annual = |out: &Path, cache: &Path, shard: Option<String>| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_daystep"));
+        c.args(["--threads", "1", "annual"])
+            .arg(&scene)
+            .arg("--weather")
+            .arg(&weather)
+            .arg("--out")
+            .arg(out)
+            .arg("--cache")
+            .arg(cache)
+            .args([
+                "--quality",
+                "draft",
+                "--start",
+                "2021-06-01",
+                "--end",
+                "2021-06-05",
+            ])
+            .current_dir(d.path())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped());
+        if let Some(s) = shard {
+            c.args(["--shard", &s]);
+        }
+        c.spawn().unwrap()
+    };
+    let shards: Vec<PathBuf> = (1..=4)
+        .map(|k| d.path().join(format!("shard{k}")))
+        .collect();
+    let mut children: Vec<_> = shards
+        .iter()
+        .enumerate()
+        .map(|(i, out)| annual(out, &shared, Some(format!("{}/4", i + 1))))
+        .collect();
+    let one = d.path().join("one");
+    children.push(annual(&one, &own, None));
+    for c in children {
+        let o = c.wait_with_output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let computed = t0.elapsed();
+    let merged = d.path().join("merged");
+    let mut args = vec!["merge".to_owned()];
+    args.extend(shards.iter().map(|p| p.display().to_string()));
+    args.extend(["--out".to_owned(), merged.display().to_string()]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let o = crate::util::daystep(&args);
+    assert!(o.status.success(), "{}", crate::util::stderr(&o));
+    for f in OUTPUTS {
+        let (want, got) = (read(&one, f), read(&merged, f));
+        if want != got {
+            let (w, g) = (
+                String::from_utf8_lossy(&want),
+                String::from_utf8_lossy(&got),
+            );
+            let line = w.lines().zip(g.lines()).position(|(a, b)| a != b);
+            let show = |t: &str| line.and_then(|i| t.lines().nth(i)).unwrap_or("").to_owned();
+            panic!(
+                "{f}: the merged shards differ from the one run at line {:?}: {:?} against {:?}",
+                line.map(|i| i + 1),
+                show(&g),
+                show(&w)
+            );
+        }
+    }
+    // No shard ever read a partial record of another (a rebuild) or failed a write; the
+    // shards together stored exactly the records the one run stored, byte for byte, all
+    // valid, with no temporary file left.
+    let mut writes = 0;
+    for s in &shards {
+        let (rebuilds, failures, w) = cache_counters(s);
+        assert_eq!((rebuilds, failures), (0, 0), "{}", s.display());
+        writes += w;
+    }
+    let v = daystep::cache::verify(&shared).unwrap();
+    assert!(v.is_clean() && v.temp_files == 0, "{v:?}");
+    let names = record_names(&shared);
+    assert_eq!(names, record_names(&own));
+    for n in &names {
+        // Whichever shard's rename won, the record is the one the one run computed.
+        assert!(read(&shared, n) == read(&own, n), "record {n} differs");
+    }
+    eprintln!(
+        "4 shards + 1 run: {:.1} s, merge and checks {:.1} s; {} records, {writes} written by the shards",
+        computed.as_secs_f64(),
+        (t0.elapsed() - computed).as_secs_f64(),
+        v.ok
+    );
 }
 
 #[test]

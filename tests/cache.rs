@@ -10,6 +10,7 @@ use daystep::cache::{
 use daystep::hierarchy::ElementKey;
 use daystep::projection::{DirectionRecord, LeafWeight, ProjectionStats};
 use glam::DVec3;
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::Duration;
@@ -212,23 +213,69 @@ fn eviction_keeps_the_most_recently_used_records() {
 }
 
 const CHILD_ENV: &str = "DAYSTEP_CACHE_TEST_CHILD_DIR";
+/// A folder beside the cache where children say they are ready and wait for `go`.
+const SYNC_ENV: &str = "DAYSTEP_CACHE_TEST_SYNC_DIR";
+/// Rounds over the keys; odd rounds rewrite every shared key.
+const ROUNDS: u64 = 6;
+/// Keys every worker reads and writes.
 const SHARED_KEYS: u64 = 12;
+/// Keys only one worker writes: worker `w` owns `own_key(w, 0..OWN_KEYS)`.
+const OWN_KEYS: u64 = 6;
+/// Workers: 0..4 are threads of the test, 4..8 child processes.
+const WORKERS: u64 = 8;
+/// Leaves per record (40 bytes each: about 80 KB a record, so a write takes a while).
+const LEAVES: usize = 2000;
 
-/// Every worker: look each key up; check a hit against the expected record; on a miss,
-/// write it and check that it is then served. Keys visited in a worker-specific order.
+fn own_key(worker: u64, j: u64) -> u64 {
+    1000 + 100 * worker + j
+}
+
+/// Waits until `path` exists, at most a minute.
+fn wait_for(path: &Path) {
+    let t = std::time::Instant::now();
+    while !path.exists() {
+        assert!(
+            t.elapsed() < Duration::from_secs(60),
+            "no {} within a minute",
+            path.display()
+        );
+        std::thread::sleep(Duration::from_millis(1));
+    }
+}
+
+/// Every worker, [`ROUNDS`] rounds: look each shared key up; a hit must be the expected
+/// record byte for byte; on a miss, write it and check that it is then served. In odd
+/// rounds every shared key is written again whatever the lookup found, so renames replace
+/// records while other workers read them. Shared keys are visited in a worker-specific
+/// order. The worker also writes its own keys (round 0) and reads them back (every round).
 fn share_keys(store: &Store, worker: u64) {
-    for round in 0..3 {
+    for round in 0..ROUNDS {
         for i in 0..SHARED_KEYS {
             let d = (i * (2 * worker + 1) + round) % SHARED_KEYS;
-            let want = direction_record(d, 2000);
+            let want = encoded(d, LEAVES);
             let got = match store.get(&key(d)) {
-                Some(hit) => hit,
-                None => {
-                    store.put(&key(d), &encoded(d, 2000));
+                Some(hit) if round % 2 == 0 => hit,
+                _ => {
+                    store.put(&key(d), &want);
                     store.get(&key(d)).expect("served right after writing")
                 }
             };
-            assert_eq!(decode_direction(&got).unwrap(), want);
+            assert!(
+                got.bytes() == &want[..],
+                "worker {worker}: key {d} read back other bytes"
+            );
+        }
+        for j in 0..OWN_KEYS {
+            let d = own_key(worker, j);
+            let want = encoded(d, LEAVES);
+            if round == 0 {
+                store.put(&key(d), &want);
+            }
+            let got = store.get(&key(d)).expect("an own key is served");
+            assert!(
+                got.bytes() == &want[..],
+                "worker {worker}: own key {d} read back other bytes"
+            );
         }
     }
     let s = store.stats();
@@ -250,14 +297,25 @@ fn child_process_worker() {
         .unwrap()
         .parse()
         .unwrap();
+    let sync = PathBuf::from(std::env::var(SYNC_ENV).unwrap());
+    std::fs::write(sync.join(format!("ready-{worker}")), "").unwrap();
+    wait_for(&sync.join("go"));
     share_keys(&Store::open(Path::new(&dir), DEFAULT_MAX_BYTES), worker);
 }
 
+/// Four threads and four processes write overlapping keys (all of them the shared ones,
+/// rewriting them while others read) and disjoint keys (their own) into one folder at
+/// once. Afterwards nothing is lost (every key written is there and reads back bit for
+/// bit), nothing is duplicated (the folder holds exactly one file per key: no temporary
+/// file, no second name), and `verify` finds nothing invalid. During the run no reader saw
+/// a partial or foreign record (no rebuild) and no write failed. All eight start together,
+/// once the children are up.
 #[test]
 fn threads_and_processes_share_one_folder() {
     let dir = tempfile::tempdir().unwrap();
+    let sync = tempfile::tempdir().unwrap();
     let exe = std::env::current_exe().unwrap();
-    let children: Vec<_> = (0..4u64)
+    let children: Vec<_> = (4..WORKERS)
         .map(|w| {
             Command::new(&exe)
                 .args([
@@ -267,7 +325,8 @@ fn threads_and_processes_share_one_folder() {
                     "--nocapture",
                 ])
                 .env(CHILD_ENV, dir.path())
-                .env("DAYSTEP_CACHE_TEST_WORKER", (w + 4).to_string())
+                .env(SYNC_ENV, sync.path())
+                .env("DAYSTEP_CACHE_TEST_WORKER", w.to_string())
                 .stdout(std::process::Stdio::piped())
                 .stderr(std::process::Stdio::piped())
                 .spawn()
@@ -275,6 +334,10 @@ fn threads_and_processes_share_one_folder() {
         })
         .collect();
     let store = Store::open(dir.path(), DEFAULT_MAX_BYTES);
+    for w in 4..WORKERS {
+        wait_for(&sync.path().join(format!("ready-{w}")));
+    }
+    std::fs::write(sync.path().join("go"), "").unwrap();
     std::thread::scope(|s| {
         for w in 0..4 {
             let store = &store;
@@ -291,9 +354,38 @@ fn threads_and_processes_share_one_folder() {
         );
         assert!(text.contains("1 passed"), "the child ran no test:\n{text}");
     }
+    // Exactly one file per key written, and nothing else.
+    let written: Vec<u64> = (0..SHARED_KEYS)
+        .chain((0..WORKERS).flat_map(|w| (0..OWN_KEYS).map(move |j| own_key(w, j))))
+        .collect();
+    let expected: BTreeSet<String> = written.iter().map(|&d| key(d).file_name()).collect();
+    assert_eq!(expected.len(), written.len(), "two keys share a file name");
+    let mut names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    let listed: BTreeSet<String> = names.iter().cloned().collect();
+    let missing: Vec<_> = expected.difference(&listed).collect();
+    let extra: Vec<_> = listed.difference(&expected).collect();
+    assert!(
+        missing.is_empty() && extra.is_empty(),
+        "lost: {missing:?}; not one file per key: {extra:?}"
+    );
+    assert_eq!(names.len(), expected.len());
+    // Every key reads back bit for bit, from the file and through a fresh store.
+    let fresh = Store::open(dir.path(), DEFAULT_MAX_BYTES);
+    for &d in &written {
+        let want = encoded(d, LEAVES);
+        let on_disk = std::fs::read(dir.path().join(key(d).file_name())).unwrap();
+        assert!(on_disk == want, "key {d}: the file holds other bytes");
+        let hit = fresh.get(&key(d)).expect("a hit");
+        assert!(hit.bytes() == &want[..], "key {d}: served other bytes");
+    }
+    assert_eq!(fresh.stats().rebuilds, 0);
     let report = cache::verify(dir.path()).unwrap();
     assert!(report.is_clean(), "{:?}", report.invalid);
-    assert_eq!(report.ok as u64, SHARED_KEYS);
+    assert_eq!(report.ok, written.len());
     assert_eq!(report.temp_files, 0);
     assert!(report.foreign.is_empty(), "{:?}", report.foreign);
 }
