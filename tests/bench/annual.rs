@@ -1,84 +1,1013 @@
-//! Annual runs (`cargo bench --bench annual`): the sample office over its bundled TMY year
-//! at default quality, from an empty cache and again from the warm cache, with the
-//! per-stage split; the 10 000-triangle building (1 620 sensors) over one week, cold and
-//! warm. Prints only; `-- --office-only` skips the building.
+//! Annual runs (`cargo bench --bench annual`, issue 14): daystep's cost against Radiance's
+//! 2-phase daylight coefficients on the same scenes and weather. Prints markdown tables;
+//! nothing here asserts a time.
+//!
+//! Modes (arguments after `--`):
+//!
+//! * default: (a) the sample office (`scenes/office`, 165 sensors) and (b) the generated
+//!   10 000-triangle building (`scenes::multi_storey_building(10_000)`, 1 620 sensors,
+//!   written as OBJ/MTL/.pts with `scenes::write_obj` to `target/bench-annual/scenes`), each
+//!   over the whole TMY year of `scenes/office/weather.epw` at default quality: daystep
+//!   from an empty cache (cold) and again from that cache (warm), then Radiance's 2-phase
+//!   (`epw2wea`, `gendaymtx -m 1`, `rfluxmtx -ab 5 -ad 10000 -lw 1e-5`, `dctimestep`,
+//!   `rmtxop` to photopic illuminance; `tests/bench/radiance/validate.py --two-phase-only`
+//!   converts the scene and runs it). Tables: wall times and their ratios, peak memory,
+//!   DA300 / sDA300/50 % / UDI100-3000 from both tools with the same occupancy (8:00–17:59
+//!   every day) and the hour-by-hour difference, Radiance's stages, daystep's stages.
+//! * `--office-only`: only the office.
+//! * `--no-radiance`: daystep only. Radiance runs when `target/radiance-venv/bin/python`
+//!   imports pyradiance (`tests/bench/radiance/run.sh` makes it once, downloading the wheel
+//!   from PyPI); otherwise the bench says so and runs daystep only.
+//! * `--scaling`: daystep only, cold and warm, over one week (15–21 June): sensors
+//!   ≈ 100 → 1 000 → 10 000 on the 10 000-triangle building (a regular grid at 0.8 m on
+//!   every floor instead of its own 2.4 m grid), and triangles 1 000 → 10 000 → 100 000
+//!   (`multi_storey_building(n)`) with ≈ 1 000 sensors each. Prints a table and writes a
+//!   log–log plot to `target/bench-annual-scaling.svg`.
+//!
+//! Options for short trials (not needed for the real bench): `--days N` (N days from 15
+//! June instead of the year or the week), `--start YYYY-MM-DD` / `--end YYYY-MM-DD`,
+//! `--radiance-nproc N` (rfluxmtx `-n`; default: every core, as daystep uses),
+//! `--radiance-opts "…"` (rfluxmtx settings instead of `-ab 5 -ad 10000 -lw 1e-5`), and
+//! for `--scaling` `--max-sensors N` / `--max-triangles N` (skip larger sweep points).
+//!
+//! Every daystep run is a child process (this binary again, `--child …`) so that its peak
+//! resident memory (VmHWM, read by the child at its end) and wall time are its own; the
+//! child loads the scene file and weather, calls `daystep::sequence::annual::run_annual`
+//! and writes `summary.json` as `daystep annual` does. "daystep s" is the child's wall
+//! time (scene and weather reading included); Radiance's is the sum of its stages'
+//! programs (the Python scene conversion is listed apart). Scratch files go to
+//! `target/bench-annual`; daystep's caches and outputs to a temporary folder in it.
 
+use chrono::{Datelike, NaiveDate, NaiveDateTime, Timelike};
 use daystep::cache::{Store, DEFAULT_MAX_BYTES};
-use daystep::scene::Scene;
-use daystep::sequence::annual::{run_annual, AnnualOptions, AnnualReport, RunControl};
+use daystep::scene::{Scene, Sensor};
+use daystep::sequence::annual::{run_annual, AnnualOptions, RunControl};
 use daystep::sequence::Quality;
 use daystep::weather::read_weather;
-use std::path::Path;
+use glam::DVec3;
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
 use std::sync::atomic::AtomicBool;
+use std::time::Instant;
 
 #[path = "../scenes/mod.rs"]
 mod scenes;
 
-fn run(
-    scene: &Scene,
-    weather: &Path,
-    days: Option<(&str, &str)>,
-    cache: &Path,
-    out: &Path,
-) -> AnnualReport {
-    let w = read_weather(weather).unwrap();
-    let store = Store::open(cache, DEFAULT_MAX_BYTES);
+/// The bench's rfluxmtx settings (BENCH_DC_OPTS in validate.py).
+const RADIANCE_OPTS: &str = "-ab 5 -ad 10000 -lw 1e-5";
+/// First day of `--days` and of the scaling week.
+const JUNE_15: (i32, u32, u32) = (2021, 6, 15);
+
+// ---------------------------------------------------------------------------------------
+// Options
+// ---------------------------------------------------------------------------------------
+
+#[derive(Debug)]
+struct Opts {
+    office_only: bool,
+    no_radiance: bool,
+    scaling: bool,
+    days: Option<u32>,
+    start: Option<NaiveDate>,
+    end: Option<NaiveDate>,
+    radiance_nproc: usize,
+    radiance_opts: Option<String>,
+    max_sensors: usize,
+    max_triangles: usize,
+}
+
+fn parse_opts(args: &[String]) -> Opts {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut o = Opts {
+        office_only: false,
+        no_radiance: false,
+        scaling: false,
+        days: None,
+        start: None,
+        end: None,
+        radiance_nproc: cores,
+        radiance_opts: None,
+        max_sensors: usize::MAX,
+        max_triangles: usize::MAX,
+    };
+    let date = |s: &str| {
+        NaiveDate::parse_from_str(s, "%Y-%m-%d")
+            .unwrap_or_else(|e| panic!("bad date {s:?} (want YYYY-MM-DD): {e}"))
+    };
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut value = || {
+            it.next()
+                .unwrap_or_else(|| panic!("{a} needs a value"))
+                .clone()
+        };
+        let num = |v: String| -> usize {
+            v.parse()
+                .unwrap_or_else(|e| panic!("{a}: bad number {v:?}: {e}"))
+        };
+        match a.as_str() {
+            "--bench" => {} // cargo bench passes it
+            "--office-only" => o.office_only = true,
+            "--no-radiance" => o.no_radiance = true,
+            "--scaling" => o.scaling = true,
+            "--days" => o.days = Some(num(value()) as u32),
+            "--start" => o.start = Some(date(&value())),
+            "--end" => o.end = Some(date(&value())),
+            "--radiance-nproc" => o.radiance_nproc = num(value()),
+            "--radiance-opts" => o.radiance_opts = Some(value()),
+            "--max-sensors" => o.max_sensors = num(value()),
+            "--max-triangles" => o.max_triangles = num(value()),
+            other => panic!(
+                "unknown argument {other:?}; modes: --office-only, --no-radiance, --scaling \
+                 (trial options: --days N, --start/--end YYYY-MM-DD, --radiance-nproc N, \
+                 --radiance-opts \"…\", --max-sensors N, --max-triangles N)"
+            ),
+        }
+    }
+    o
+}
+
+/// The period of the runs: `None` ends are the weather file's.
+#[derive(Clone, Copy, Debug)]
+struct Period {
+    start: Option<NaiveDate>,
+    end: Option<NaiveDate>,
+}
+
+impl Period {
+    fn resolve(o: &Opts) -> Period {
+        let june15 = NaiveDate::from_ymd_opt(JUNE_15.0, JUNE_15.1, JUNE_15.2).expect("date");
+        if let Some(n) = o.days {
+            let s = o.start.unwrap_or(june15);
+            return Period {
+                start: Some(s),
+                end: Some(s + chrono::Days::new(u64::from(n.max(1) - 1))),
+            };
+        }
+        if o.scaling && o.start.is_none() && o.end.is_none() {
+            return Period {
+                start: Some(june15),
+                end: Some(june15 + chrono::Days::new(6)),
+            };
+        }
+        Period {
+            start: o.start,
+            end: o.end,
+        }
+    }
+
+    fn label(&self) -> String {
+        match (self.start, self.end) {
+            (None, None) => "year".into(),
+            (s, e) => format!(
+                "{} – {}",
+                s.map_or("start".into(), |d| d.format("%d %b").to_string()),
+                e.map_or("end".into(), |d| d.format("%d %b").to_string())
+            ),
+        }
+    }
+
+    fn child_args(&self) -> Vec<String> {
+        let mut v = Vec::new();
+        if let Some(s) = self.start {
+            v.extend(["--start".into(), s.to_string()]);
+        }
+        if let Some(e) = self.end {
+            v.extend(["--end".into(), e.to_string()]);
+        }
+        v
+    }
+
+    /// validate.py's `--start MM-DD --end MM-DD`.
+    fn radiance_args(&self) -> Vec<String> {
+        let mut v = Vec::new();
+        if let Some(s) = self.start {
+            v.extend(["--start".into(), s.format("%m-%d").to_string()]);
+        }
+        if let Some(e) = self.end {
+            v.extend(["--end".into(), e.format("%m-%d").to_string()]);
+        }
+        v
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// The child: one measured daystep run
+// ---------------------------------------------------------------------------------------
+
+fn peak_rss_mb() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
+        })
+        .map_or(f64::NAN, |kb| kb / 1024.0)
+}
+
+/// `--child SCENE.toml WEATHER CACHE OUT RESULT.json [--start D] [--end D]`: loads the
+/// scene and weather, runs the year (or period) into OUT with the cache CACHE, writes the
+/// report, the peak memory and the thread count to RESULT.json.
+fn child(args: &[String]) {
+    let [scene, weather, cache, out, result] = [0, 1, 2, 3, 4].map(|i| PathBuf::from(&args[i]));
+    let o = parse_opts(&args[5..]);
+    let t0 = Instant::now();
+    let scene = Scene::load(&scene).unwrap();
+    let w = read_weather(&weather).unwrap();
+    let load_s = t0.elapsed().as_secs_f64();
+    let store = Store::open(&cache, DEFAULT_MAX_BYTES);
     let stop = AtomicBool::new(false);
     let quiet = |_: usize, _: usize| {};
-    let d = |s: &str| Some(chrono::NaiveDate::parse_from_str(s, "%Y-%m-%d").unwrap());
     let opts = AnnualOptions {
-        start: days.and_then(|x| d(x.0)),
-        end: days.and_then(|x| d(x.1)),
+        start: o.start,
+        end: o.end,
         ..AnnualOptions::default()
     };
     let c = RunControl {
         stop: &stop,
         progress: &quiet,
     };
-    let _ = std::fs::remove_dir_all(out);
-    run_annual(scene, &w, &Quality::default(), &store, out, &opts, &c).unwrap()
+    let _ = std::fs::remove_dir_all(&out);
+    let report = run_annual(&scene, &w, &Quality::default(), &store, &out, &opts, &c).unwrap();
+    let v = json!({
+        "report": report,
+        "load_seconds": load_s,
+        "peak_rss_mb": peak_rss_mb(),
+        "threads": rayon::current_num_threads(),
+        "triangles": scene.input_triangles,
+        "sensors": scene.sensors.len(),
+    });
+    std::fs::write(result, serde_json::to_string_pretty(&v).unwrap()).unwrap();
 }
 
-fn show(label: &str, r: &AnnualReport) {
-    println!(
-        "| {label} | {} | {} | {} | {} built, {} from cache, {} reused | {:.1} | {:.2} % / {:.2} % |",
-        r.steps, r.computed, r.sun_steps, r.directions.built, r.directions.from_cache, r.directions.reused,
-        r.total_seconds, 100.0 * r.median_relative_err, 100.0 * r.p95_relative_err
+/// One daystep run as measured by the parent.
+struct DsRun {
+    /// Child wall time, s.
+    wall_s: f64,
+    /// The child's result (report, peak memory, …).
+    v: Value,
+    /// `summary.json`.
+    summary: Value,
+    out: PathBuf,
+}
+
+impl DsRun {
+    fn f(&self, key: &str) -> f64 {
+        self.v[key].as_f64().unwrap_or(f64::NAN)
+    }
+    fn report(&self, key: &str) -> f64 {
+        self.v["report"][key].as_f64().unwrap_or(f64::NAN)
+    }
+    fn metric(&self, key: &str) -> f64 {
+        self.summary["summary"][key].as_f64().unwrap_or(f64::NAN)
+    }
+}
+
+fn daystep(scene: &Path, weather: &Path, period: Period, cache: &Path, out: &Path) -> DsRun {
+    let result = out.with_extension("result.json");
+    let exe = std::env::current_exe().unwrap();
+    let t0 = Instant::now();
+    let status = Command::new(exe)
+        .arg("--child")
+        .args([scene, weather, cache, out, &result])
+        .args(period.child_args())
+        .stdin(Stdio::null())
+        .status()
+        .unwrap();
+    let wall_s = t0.elapsed().as_secs_f64();
+    assert!(status.success(), "daystep child failed: {status}");
+    let v: Value = serde_json::from_str(&std::fs::read_to_string(&result).unwrap()).unwrap();
+    let summary = std::fs::read_to_string(out.join("summary.json"))
+        .ok()
+        .and_then(|s| serde_json::from_str(&s).ok())
+        .unwrap_or(Value::Null);
+    DsRun {
+        wall_s,
+        v,
+        summary,
+        out: out.to_path_buf(),
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Radiance
+// ---------------------------------------------------------------------------------------
+
+/// The venv's Python when it imports pyradiance.
+fn radiance_python(root: &Path) -> Option<PathBuf> {
+    let py = root.join("target/radiance-venv/bin/python");
+    let ok = py.exists()
+        && Command::new(&py)
+            .args(["-c", "import pyradiance"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success());
+    ok.then_some(py)
+}
+
+struct RadRun {
+    /// Wall time of the python process, s (conversion, Radiance, metrics).
+    process_s: f64,
+    v: Value,
+}
+
+impl RadRun {
+    fn f(&self, key: &str) -> f64 {
+        self.v[key].as_f64().unwrap_or(f64::NAN)
+    }
+    fn metric(&self, key: &str) -> f64 {
+        self.v["metrics"][key].as_f64().unwrap_or(f64::NAN)
+    }
+    fn stage(&self, name: &str) -> f64 {
+        self.v["stages"]
+            .as_array()
+            .and_then(|a| a.iter().find(|s| s["stage"] == name))
+            .and_then(|s| s["seconds"].as_f64())
+            .unwrap_or(f64::NAN)
+    }
+}
+
+fn radiance(
+    py: &Path,
+    root: &Path,
+    o: &Opts,
+    scene: &Path,
+    weather: &Path,
+    period: Period,
+    work: &Path,
+) -> RadRun {
+    std::fs::create_dir_all(work).unwrap();
+    let out = work.join("result.json");
+    let _ = std::fs::remove_file(&out);
+    let mut cmd = Command::new(py);
+    cmd.arg(root.join("tests/bench/radiance/validate.py"))
+        .arg("--two-phase-only")
+        .arg("--scene")
+        .arg(scene)
+        .arg("--weather")
+        .arg(weather)
+        .arg("--work")
+        .arg(work)
+        .args(["--nproc", &o.radiance_nproc.to_string()])
+        .arg("--json")
+        .arg(&out)
+        .args(period.radiance_args())
+        .stdin(Stdio::null())
+        .stdout(Stdio::null());
+    if let Some(opts) = &o.radiance_opts {
+        cmd.arg(format!("--dc-opts={opts}"));
+    }
+    let t0 = Instant::now();
+    let status = cmd.status().unwrap();
+    let process_s = t0.elapsed().as_secs_f64();
+    assert!(
+        status.success(),
+        "validate.py --two-phase-only failed: {status}"
     );
-    let split: Vec<String> = r
-        .stage_seconds
-        .iter()
-        .map(|(n, s)| format!("{n} {s:.2}"))
+    let v = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    RadRun { process_s, v }
+}
+
+/// daystep (cold run) against Radiance hour by hour: over occupied steps (8:00–17:59) and
+/// sensors where Radiance > 100 lx, (mean relative difference, RMS relative difference,
+/// count); `None` when the rows do not line up.
+fn hourly(ds: &DsRun, rad: &RadRun) -> Option<(f64, f64, usize)> {
+    let (times, rows) =
+        daystep::export::read_illuminance_csv(&ds.out.join("illuminance.csv")).ok()?;
+    let bytes = std::fs::read(rad.v["illuminance_f32"].as_str()?).ok()?;
+    let ill: Vec<f32> = bytes
+        .chunks_exact(4)
+        .map(|b| f32::from_ne_bytes([b[0], b[1], b[2], b[3]]))
         .collect();
+    let rtimes = rad.v["times"].as_array()?;
+    let ns = rows.first()?.len();
+    if rows.len() != rtimes.len() || ill.len() != rows.len() * ns {
+        return None;
+    }
+    let (mut sum, mut sq, mut n) = (0.0, 0.0, 0usize);
+    for (k, (t, rt)) in times.iter().zip(rtimes).enumerate() {
+        let t = NaiveDateTime::parse_from_str(t, daystep::export::TIME_FORMAT).ok()?;
+        let (m, d, h) = (rt[0].as_u64()?, rt[1].as_u64()?, rt[2].as_f64()?);
+        let th = t.hour() as f64 + t.minute() as f64 / 60.0;
+        if u64::from(t.month()) != m || u64::from(t.day()) != d || (th - h).abs() > 1e-3 {
+            return None;
+        }
+        if !(8..=17).contains(&(h.floor() as i64)) {
+            continue;
+        }
+        for (s, &v) in rows[k].iter().enumerate() {
+            let r = f64::from(ill[k * ns + s]);
+            if r > 100.0 {
+                let x = (v - r) / r;
+                sum += x;
+                sq += x * x;
+                n += 1;
+            }
+        }
+    }
+    (n > 0).then(|| (100.0 * sum / n as f64, 100.0 * (sq / n as f64).sqrt(), n))
+}
+
+// ---------------------------------------------------------------------------------------
+// Scenes
+// ---------------------------------------------------------------------------------------
+
+/// Writes `scene` as a scene folder (`scene.toml`, OBJ, MTL, .pts) and returns its
+/// scene file.
+fn write_scene(scene: &Scene, dir: &Path, stem: &str) -> PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    scenes::write_obj(scene, dir, stem).unwrap();
+    dir.join("scene.toml")
+}
+
+/// The building's sensors replaced by a regular grid of about `target` upward sensors at
+/// its own sensor height on every floor (the plan is the `rooms` group's bounds), none
+/// inside a partition.
+fn with_sensor_grid(mut scene: Scene, target: usize) -> Scene {
+    let mut zs: Vec<f64> = scene.sensors.iter().map(|s| s.position.z).collect();
+    zs.sort_by(f64::total_cmp);
+    zs.dedup_by(|a, b| (*a - *b).abs() < 1e-6);
+    let tris = &scene.triangles[..scene.input_triangles];
+    let group = |name: &str| {
+        scene
+            .groups
+            .iter()
+            .position(|g| g == name)
+            .map(|i| i as u32)
+    };
+    let rooms = group("rooms").expect("the building has a rooms group");
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for t in tris.iter().filter(|t| t.group == rooms) {
+        for v in t.v {
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+    }
+    // Partition faces across x: (x, y range, z range).
+    let walls: Vec<(f64, [f64; 2], [f64; 2])> = match group("partitions") {
+        Some(p) => tris
+            .iter()
+            .filter(|t| t.group == p && t.cross().normalize().x.abs() > 0.9)
+            .map(|t| {
+                let ys = t.v.map(|v| v.y);
+                let zs = t.v.map(|v| v.z);
+                let r = |a: [f64; 3]| [a[0].min(a[1]).min(a[2]), a[0].max(a[1]).max(a[2])];
+                (t.v[0].x, r(ys), r(zs))
+            })
+            .collect(),
+        None => Vec::new(),
+    };
+    let (w, d) = (hi.x - lo.x, hi.y - lo.y);
+    let floors = zs.len().max(1);
+    let mut best = (f64::INFINITY, 1usize, 1usize);
+    for nx in 1..=400usize {
+        for ny in 1..=400usize {
+            let n = (nx * ny * floors) as f64;
+            let score = (n / target as f64 - 1.0).abs()
+                + 0.05 * ((nx as f64 / ny as f64) / (w / d)).ln().abs();
+            if score < best.0 {
+                best = (score, nx, ny);
+            }
+        }
+    }
+    let (_, nx, ny) = best;
+    let origin = scene.origin;
+    scene.sensors.clear();
+    for &z in &zs {
+        for j in 0..ny {
+            for i in 0..nx {
+                let p = DVec3::new(
+                    lo.x + (i as f64 + 0.5) * w / nx as f64,
+                    lo.y + (j as f64 + 0.5) * d / ny as f64,
+                    z,
+                );
+                let inside = walls.iter().any(|(x, yr, zr)| {
+                    (p.x - x).abs() < 0.1
+                        && (yr[0] - 0.01..=yr[1] + 0.01).contains(&p.y)
+                        && (zr[0]..=zr[1]).contains(&p.z)
+                });
+                if !inside {
+                    scene.sensors.push(Sensor {
+                        position: p,
+                        normal: DVec3::Z,
+                        input_position: p + origin,
+                    });
+                }
+            }
+        }
+    }
+    scene
+}
+
+// ---------------------------------------------------------------------------------------
+// Printing
+// ---------------------------------------------------------------------------------------
+
+fn show_daystep(label: &str, r: &DsRun) {
+    let rep = &r.v["report"];
+    let dirs = &rep["directions"];
+    println!(
+        "| {label} | {} | {} | {} | {} built, {} from cache, {} reused | {} / {} | {:.1} | {:.1} | {:.0} | {:.2} % / {:.2} % |",
+        rep["steps"], rep["computed"], rep["sun_steps"], dirs["built"], dirs["from_cache"],
+        dirs["reused"], rep["cache"]["writes"], rep["cache"]["evictions"],
+        r.report("total_seconds"), r.f("load_seconds"), r.f("peak_rss_mb"),
+        100.0 * r.report("median_relative_err"), 100.0 * r.report("p95_relative_err")
+    );
+    let split: Vec<String> = rep["stage_seconds"]
+        .as_array()
+        .map(|a| {
+            a.iter()
+                .map(|s| {
+                    format!(
+                        "{} {:.2}",
+                        s[0].as_str().unwrap_or("?"),
+                        s[1].as_f64().unwrap_or(f64::NAN)
+                    )
+                })
+                .collect()
+        })
+        .unwrap_or_default();
     println!(
         "|   stages (s, summed over threads) | {} |",
         split.join(", ")
     );
 }
 
-fn main() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let tmp = tempfile::tempdir().unwrap();
-    let office = Scene::load(&root.join("scenes/office/scene.toml")).unwrap();
-    let epw = root.join("scenes/office/weather.epw");
-    println!("| run | steps | computed | sun steps | directions | s | stated error median / p95 |\n|---|---|---|---|---|---|---|");
-    let cache = tmp.path().join("cache");
-    let cold = run(&office, &epw, None, &cache, &tmp.path().join("o1"));
-    show("office, year, cold cache", &cold);
-    let warm = run(&office, &epw, None, &cache, &tmp.path().join("o2"));
-    show("office, year, warm cache", &warm);
+struct SceneResult {
+    name: String,
+    triangles: u64,
+    sensors: u64,
+    steps: u64,
+    cold: DsRun,
+    warm: DsRun,
+    rad: Option<RadRun>,
+}
+
+fn ratio(a: f64, b: f64) -> String {
+    if b > 0.0 && a.is_finite() && b.is_finite() {
+        format!("{:.2}", a / b)
+    } else {
+        "—".into()
+    }
+}
+
+fn print_results(results: &[SceneResult], period: Period, o: &Opts, rad_note: &str) {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads = results
+        .first()
+        .map_or(0, |r| r.cold.v["threads"].as_u64().unwrap_or(0));
+    let rad_opts = o.radiance_opts.as_deref().unwrap_or(RADIANCE_OPTS);
     println!(
-        "cold/warm ratio {:.1}",
-        cold.total_seconds / warm.total_seconds
+        "\n## Annual cost: daystep against Radiance 2-phase ({})\n",
+        period.label()
     );
-    if std::env::args().any(|a| a == "--office-only") {
+    println!(
+        "{cores} cores; daystep {} default quality, {threads} threads; {rad_note}",
+        env!("CARGO_PKG_VERSION")
+    );
+    if let Some(r) = results.iter().find_map(|r| r.rad.as_ref()) {
+        println!(
+            "Radiance: {} (pyradiance {}), `rfluxmtx -n {} {rad_opts}`, sky `gendaymtx -m 1` \
+             (145 patches + ground) of `epw2wea`'s WEA; daystep reads the EPW itself (its \
+             dew point; gendaymtx assumes 11 °C).",
+            r.v["radiance"].as_str().unwrap_or("?"),
+            r.v["pyradiance"].as_str().unwrap_or("?"),
+            o.radiance_nproc
+        );
+    }
+    println!(
+        "\nTimes are wall seconds of each whole run (daystep: the child process, scene and \
+         weather reading included; Radiance: its programs, the Python scene conversion not \
+         counted). Ratios are daystep ÷ Radiance (below 1: daystep faster). Peak memory: \
+         daystep's VmHWM; Radiance's summed over its processes (rfluxmtx, rcontrib × n), \
+         sampled every 0.1 s, with its largest process in brackets.\n"
+    );
+    println!(
+        "| scene | steps | triangles | sensors | daystep cold s | daystep warm s | Radiance 2-phase s \
+         | cold / Radiance | warm / Radiance | peak MB: cold / warm / Radiance |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    for r in results {
+        let (rs, rmem) = match &r.rad {
+            Some(x) => (
+                format!("{:.1}", x.f("radiance_seconds")),
+                format!("{:.0} ({:.0})", x.f("rss_tree_mb"), x.f("rss_process_mb")),
+            ),
+            None => ("—".into(), "—".into()),
+        };
+        let rsec = r.rad.as_ref().map_or(f64::NAN, |x| x.f("radiance_seconds"));
+        println!(
+            "| {} | {} | {} | {} | {:.1} | {:.1} | {rs} | {} | {} | {:.0} / {:.0} / {rmem} |",
+            r.name,
+            r.steps,
+            r.triangles,
+            r.sensors,
+            r.cold.wall_s,
+            r.warm.wall_s,
+            ratio(r.cold.wall_s, rsec),
+            ratio(r.warm.wall_s, rsec),
+            r.cold.f("peak_rss_mb"),
+            r.warm.f("peak_rss_mb"),
+        );
+    }
+    println!(
+        "\nAnnual metrics (occupied: steps starting 8:00–17:59 local standard time, every day; \
+         means over sensors):\n"
+    );
+    println!("| scene | tool | DA300 mean | sDA300/50 % | UDI100-3000 mean | mean occupied lux |");
+    println!("|---|---|---|---|---|---|");
+    for r in results {
+        for (label, run) in [("daystep, cold", &r.cold), ("daystep, warm", &r.warm)] {
+            println!(
+                "| {} | {label} | {:.1} % | {:.1} % | {:.1} % | {:.0} |",
+                r.name,
+                run.metric("mean_da"),
+                run.metric("sda_percent"),
+                run.metric("mean_udi_within"),
+                run.metric("mean_lux")
+            );
+        }
+        if let Some(x) = &r.rad {
+            println!(
+                "| {} | Radiance 2-phase | {:.1} % | {:.1} % | {:.1} % | {:.0} |",
+                r.name,
+                x.metric("DA300 mean"),
+                x.metric("sDA300/50%"),
+                x.metric("UDI100-3000 mean"),
+                x.metric("mean occupied lux")
+            );
+        }
+    }
+    for r in results {
+        if let Some(x) = &r.rad {
+            match hourly(&r.cold, x) {
+                Some((mean, rms, n)) => println!(
+                    "\n{}: daystep (cold) − Radiance over {n} occupied sensor-hours with Radiance \
+                     > 100 lx: mean {mean:+.1} %, RMS {rms:.1} % (relative).",
+                    r.name
+                ),
+                None => println!(
+                    "\n{}: hour-by-hour rows do not line up: not compared.",
+                    r.name
+                ),
+            }
+        }
+    }
+    if results.iter().any(|r| r.rad.is_some()) {
+        println!("\nRadiance stages (wall s):\n");
+        println!(
+            "| scene | epw2wea | gendaymtx | rfluxmtx | dctimestep | rmtxop | total | scene \
+             conversion (Python, not in total) | validate.py process |"
+        );
+        println!("|---|---|---|---|---|---|---|---|---|");
+        for r in results {
+            if let Some(x) = &r.rad {
+                println!(
+                    "| {} | {:.2} | {:.2} | {:.1} | {:.2} | {:.2} | {:.1} | {:.2} | {:.1} |",
+                    r.name,
+                    x.stage("epw2wea"),
+                    x.stage("gendaymtx"),
+                    x.stage("rfluxmtx"),
+                    x.stage("dctimestep"),
+                    x.stage("rmtxop"),
+                    x.f("radiance_seconds"),
+                    x.f("convert_seconds"),
+                    x.process_s
+                );
+            }
+        }
+        if let Some(x) = results.iter().find_map(|r| r.rad.as_ref()) {
+            println!(
+                "\nRadiance commands (in its work folder, e.g. {}):\n",
+                x.v["work"].as_str().unwrap_or("?")
+            );
+            for c in x.v["commands"].as_array().into_iter().flatten() {
+                println!("- `{}`", c.as_str().unwrap_or("?"));
+            }
+        }
+    }
+    println!("\ndaystep runs:\n");
+    println!(
+        "| run | steps | computed | sun steps | directions | cache writes / evictions | run_annual s | load s | peak MB | stated error median / p95 |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    for r in results {
+        show_daystep(&format!("{}, cold cache", r.name), &r.cold);
+        show_daystep(&format!("{}, warm cache", r.name), &r.warm);
+    }
+    for r in results {
+        println!(
+            "{}: cold/warm ratio {:.1}",
+            r.name,
+            r.cold.wall_s / r.warm.wall_s
+        );
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Modes
+// ---------------------------------------------------------------------------------------
+
+fn compare(root: &Path, o: &Opts, work: &Path, tmp: &Path) {
+    let period = Period::resolve(o);
+    let epw = root.join("scenes/office/weather.epw");
+    let mut list: Vec<(String, PathBuf)> =
+        vec![("office".into(), root.join("scenes/office/scene.toml"))];
+    if !o.office_only {
+        let b = scenes::multi_storey_building(10_000);
+        list.push((
+            "building-10k".into(),
+            write_scene(&b, &work.join("scenes/building-10k"), "building"),
+        ));
+    }
+    let py = if o.no_radiance {
+        None
+    } else {
+        radiance_python(root)
+    };
+    let rad_note = if o.no_radiance {
+        "Radiance skipped (--no-radiance)".to_string()
+    } else if py.is_none() {
+        let m = "Radiance not installed: run tests/bench/radiance/run.sh once (it makes \
+                 target/radiance-venv with pyradiance from PyPI); daystep only";
+        eprintln!("{m}");
+        m.to_string()
+    } else {
+        format!(
+            "Radiance from {}",
+            root.join("target/radiance-venv").display()
+        )
+    };
+    let mut results = Vec::new();
+    for (name, toml) in &list {
+        let cache = tmp.join(format!("cache-{name}"));
+        let _ = std::fs::remove_dir_all(&cache);
+        eprintln!("{name}: daystep cold …");
+        let cold = daystep(
+            toml,
+            &epw,
+            period,
+            &cache,
+            &tmp.join(format!("{name}-cold")),
+        );
+        eprintln!("{name}: daystep cold {:.1} s; warm …", cold.wall_s);
+        let warm = daystep(
+            toml,
+            &epw,
+            period,
+            &cache,
+            &tmp.join(format!("{name}-warm")),
+        );
+        eprintln!("{name}: daystep warm {:.1} s", warm.wall_s);
+        let rad = py.as_ref().map(|py| {
+            eprintln!("{name}: Radiance 2-phase …");
+            radiance(
+                py,
+                root,
+                o,
+                toml,
+                &epw,
+                period,
+                &work.join("radiance").join(name),
+            )
+        });
+        results.push(SceneResult {
+            name: name.clone(),
+            triangles: cold.v["triangles"].as_u64().unwrap_or(0),
+            sensors: cold.v["sensors"].as_u64().unwrap_or(0),
+            steps: cold.v["report"]["steps"].as_u64().unwrap_or(0),
+            cold,
+            warm,
+            rad,
+        });
+    }
+    print_results(&results, period, o, &rad_note);
+}
+
+struct Point {
+    sweep: &'static str,
+    sensors: usize,
+    triangles: usize,
+    cold: DsRun,
+    warm: DsRun,
+}
+
+fn scaling(root: &Path, o: &Opts, work: &Path, tmp: &Path) {
+    let period = Period::resolve(o);
+    let epw = root.join("scenes/office/weather.epw");
+    // (sweep, target triangles, target sensors); (10 000, 1 000) is in both sweeps.
+    let plan: [(&str, usize, usize); 5] = [
+        ("sensors", 10_000, 100),
+        ("both", 10_000, 1_000),
+        ("sensors", 10_000, 10_000),
+        ("triangles", 1_000, 1_000),
+        ("triangles", 100_000, 1_000),
+    ];
+    let mut points = Vec::new();
+    for (sweep, tris, sensors) in plan {
+        if tris > o.max_triangles || sensors > o.max_sensors {
+            eprintln!("skipping {tris} triangles × {sensors} sensors (--max-…)");
+            continue;
+        }
+        let name = format!("building-{tris}-s{sensors}");
+        let scene = with_sensor_grid(scenes::multi_storey_building(tris), sensors);
+        let toml = write_scene(&scene, &work.join("scenes").join(&name), "building");
+        let cache = tmp.join(format!("cache-{name}"));
+        eprintln!("{name}: cold …");
+        let cold = daystep(
+            &toml,
+            &epw,
+            period,
+            &cache,
+            &tmp.join(format!("{name}-cold")),
+        );
+        eprintln!("{name}: cold {:.1} s; warm …", cold.wall_s);
+        let warm = daystep(
+            &toml,
+            &epw,
+            period,
+            &cache,
+            &tmp.join(format!("{name}-warm")),
+        );
+        eprintln!("{name}: warm {:.1} s", warm.wall_s);
+        let _ = std::fs::remove_dir_all(&cache);
+        points.push(Point {
+            sweep,
+            sensors: cold.v["sensors"].as_u64().unwrap_or(0) as usize,
+            triangles: cold.v["triangles"].as_u64().unwrap_or(0) as usize,
+            cold,
+            warm,
+        });
+    }
+    let threads = points
+        .first()
+        .map_or(0, |p| p.cold.v["threads"].as_u64().unwrap_or(0));
+    println!(
+        "\n## Scaling: daystep annual over {} (default quality, {threads} threads)\n",
+        period.label()
+    );
+    println!(
+        "The generated building (`multi_storey_building(n)`) with a regular sensor grid at 0.8 m \
+         on every floor; sensors swept on the 10 000-triangle building, triangles with ≈ 1 000 \
+         sensors (`both`: the point the two sweeps share). Wall seconds of the child process \
+         (scene and weather reading included).\n"
+    );
+    println!(
+        "| sweep | sensors | triangles | steps | cold s | warm s | cold / warm | peak MB cold | peak MB warm | cache evictions cold / warm |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    for p in &points {
+        println!(
+            "| {} | {} | {} | {} | {:.1} | {:.1} | {:.1} | {:.0} | {:.0} | {} / {} |",
+            p.sweep,
+            p.sensors,
+            p.triangles,
+            p.cold.v["report"]["steps"],
+            p.cold.wall_s,
+            p.warm.wall_s,
+            p.cold.wall_s / p.warm.wall_s,
+            p.cold.f("peak_rss_mb"),
+            p.warm.f("peak_rss_mb"),
+            p.cold.v["report"]["cache"]["evictions"],
+            p.warm.v["report"]["cache"]["evictions"]
+        );
+    }
+    let svg = root.join("target/bench-annual-scaling.svg");
+    match plot(&svg, &points, &period.label()) {
+        Ok(()) => println!("\nplot: {}", svg.display()),
+        Err(e) => println!("\nplot failed: {e}"),
+    }
+}
+
+/// A log axis's label: only at 1, 2 and 5 × 10^k, without a trailing ".0".
+fn log_label(v: &f64) -> String {
+    let e = v.log10().floor();
+    let lead = (v / 10f64.powf(e)).round() as i64;
+    if [1, 2, 5].contains(&lead) {
+        let x = lead as f64 * 10f64.powf(e);
+        format!("{:.*}", (-e).max(0.0) as usize, x)
+    } else {
+        String::new()
+    }
+}
+
+/// Log–log plot: cold and warm seconds against sensors (left) and triangles (right).
+fn plot(path: &Path, points: &[Point], period: &str) -> Result<(), String> {
+    use plotters::prelude::*;
+    let root = SVGBackend::new(path, (1200, 520)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let (left, right) = root.split_horizontally(600);
+    let panels = [
+        (
+            left,
+            "sensors",
+            format!("10 000-triangle building, {period}"),
+            "sensors",
+        ),
+        (
+            right,
+            "triangles",
+            format!("≈ 1 000 sensors, {period}"),
+            "triangles",
+        ),
+    ];
+    for (area, sweep, title, xdesc) in panels {
+        let mut sel: Vec<&Point> = points
+            .iter()
+            .filter(|p| p.sweep == sweep || p.sweep == "both")
+            .collect();
+        let x = |p: &Point| {
+            if sweep == "sensors" {
+                p.sensors as f64
+            } else {
+                p.triangles as f64
+            }
+        };
+        sel.sort_by(|a, b| x(a).total_cmp(&x(b)));
+        if sel.is_empty() {
+            continue;
+        }
+        let xs: Vec<f64> = sel.iter().map(|p| x(p)).collect();
+        let ys: Vec<f64> = sel
+            .iter()
+            .flat_map(|p| [p.cold.wall_s, p.warm.wall_s])
+            .collect();
+        let (x0, x1) = (xs[0], xs[xs.len() - 1]);
+        let y0 = ys.iter().copied().fold(f64::INFINITY, f64::min).max(1e-3);
+        let y1 = ys.iter().copied().fold(0.0, f64::max).max(y0 * 2.0);
+        let mut chart = ChartBuilder::on(&area)
+            .caption(title, ("sans-serif", 18))
+            .margin(14)
+            .x_label_area_size(45)
+            .y_label_area_size(60)
+            .build_cartesian_2d(
+                (x0 * 0.6..x1 * 1.6).log_scale(),
+                (y0 * 0.6..y1 * 1.6).log_scale(),
+            )
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc(xdesc)
+            .y_desc("wall time, s")
+            .x_label_formatter(&log_label)
+            .y_label_formatter(&log_label)
+            .draw()
+            .map_err(|e| e.to_string())?;
+        for (label, color, warm) in [("cold cache", RED, false), ("warm cache", BLUE, true)] {
+            let line: Vec<(f64, f64)> = sel
+                .iter()
+                .map(|p| (x(p), if warm { p.warm.wall_s } else { p.cold.wall_s }))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(line.clone(), color.stroke_width(2)))
+                .map_err(|e| e.to_string())?
+                .label(label)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                });
+            chart
+                .draw_series(line.iter().map(|p| Circle::new(*p, 4, color.filled())))
+                .map_err(|e| e.to_string())?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| e.to_string())?;
+    }
+    root.present().map_err(|e| e.to_string())
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().is_some_and(|a| a == "--child") {
+        child(&args[1..]);
         return;
     }
-    let building = scenes::multi_storey_building(10_000);
-    let cache = tmp.path().join("cache_b");
-    let week = Some(("2021-06-15", "2021-06-21"));
-    let cold = run(&building, &epw, week, &cache, &tmp.path().join("b1"));
-    show("building, one week, cold cache", &cold);
-    let warm = run(&building, &epw, week, &cache, &tmp.path().join("b2"));
-    show("building, one week, warm cache", &warm);
+    let o = parse_opts(&args);
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let work = root.join("target/bench-annual");
+    std::fs::create_dir_all(&work).unwrap();
+    let tmp = tempfile::Builder::new()
+        .prefix("runs-")
+        .tempdir_in(&work)
+        .unwrap();
+    let t0 = Instant::now();
+    if o.scaling {
+        scaling(root, &o, &work, tmp.path());
+    } else {
+        compare(root, &o, &work, tmp.path());
+    }
+    println!(
+        "\nbench wall time {:.0} s; load average at the end {}",
+        t0.elapsed().as_secs_f64(),
+        std::fs::read_to_string("/proc/loadavg")
+            .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(", "))
+            .unwrap_or_default()
+    );
 }

@@ -29,6 +29,11 @@ What it does, for each instant (a Perez sky with sun, a CIE overcast sky):
 With --annual, also a year of the bundled weather file: Radiance 2-phase daylight
 coefficients (gendaymtx + rfluxmtx + dctimestep) against `daystep annual`, compared by
 DA300, sDA, UDI and hour by hour.
+With --two-phase-only (called by `cargo bench --bench annual`, the speed bench of issue 14),
+only Radiance's 2-phase on --scene and --weather (optionally --start/--end MM-DD): the
+scene conversion, epw2wea, gendaymtx, rfluxmtx (-ab 5 -ad 10000 -lw 1e-5, or --dc-opts),
+dctimestep, rmtxop, each stage timed and its memory sampled; the metrics as --annual
+computes them; all written to --json (the illuminance to illuminance.f32 beside it).
 
 Standard library only (plus the pyradiance wheel for its binaries). Radiance is called as
 command-line programs via subprocess.
@@ -470,6 +475,221 @@ def annual_study(a, env, exe, scene_path, work, pts_text, rho_g):
     print()
 
 
+# --------------------------------------------------------------------------------------
+# The speed bench's 2-phase run (--two-phase-only, called by `cargo bench --bench annual`)
+# --------------------------------------------------------------------------------------
+
+# The speed bench's daylight-coefficient settings (issue 14): a common 2-phase setting,
+# lighter than DC_OPTS above (the validation's).
+BENCH_DC_OPTS = "-ab 5 -ad 10000 -lw 1e-5"
+
+
+def tree_memory_kb(root):
+    """Resident memory of process `root` and its descendants, from /proc: (VmRSS summed
+    over the processes, the largest process's VmHWM), kB."""
+    children = {}
+    for p in os.listdir("/proc"):
+        if not p.isdigit():
+            continue
+        try:
+            with open(f"/proc/{p}/stat") as f:
+                ppid = int(f.read().rsplit(")", 1)[1].split()[1])
+        except (OSError, ValueError, IndexError):
+            continue
+        children.setdefault(ppid, []).append(int(p))
+    rss, hwm, todo = 0, 0, [root]
+    while todo:
+        pid = todo.pop()
+        try:
+            with open(f"/proc/{pid}/status") as f:
+                for l in f:
+                    if l.startswith("VmRSS:"):
+                        rss += int(l.split()[1])
+                    elif l.startswith("VmHWM:"):
+                        hwm = max(hwm, int(l.split()[1]))
+        except (OSError, ValueError, IndexError):
+            pass
+        todo.extend(children.get(pid, []))
+    return rss, hwm
+
+
+def run_measured(name, cmd, env, cwd, stdin=None, stdout=None):
+    """Runs one Radiance stage with stdin/stdout redirected to files. Returns (wall s, peak
+    resident memory of its largest process, MB, peak resident memory summed over the
+    process and its descendants, MB). Memory is sampled from /proc every 0.1 s (VmHWM for
+    the first figure, so a process's own peak counts if it is alive at a sample; a stage
+    shorter than that may read 0). Not getrusage: a child's ru_maxrss starts at the
+    forking Python's size."""
+    import threading
+
+    fin = open(stdin, "rb") if stdin else subprocess.DEVNULL
+    fout = open(stdout, "wb") if stdout else subprocess.DEVNULL
+    err_path = Path(cwd) / f"{name}.stderr"
+    ferr = open(err_path, "wb")
+    t0 = time.perf_counter()
+    p = subprocess.Popen([str(c) for c in cmd], env=env, cwd=cwd, stdin=fin, stdout=fout,
+                         stderr=ferr)
+    peak, done = [0, 0], threading.Event()
+
+    def sample():
+        while not done.is_set():
+            rss, hwm = tree_memory_kb(p.pid)
+            peak[0], peak[1] = max(peak[0], rss), max(peak[1], hwm)
+            done.wait(0.1)
+
+    th = threading.Thread(target=sample, daemon=True)
+    th.start()
+    p.wait()
+    secs = time.perf_counter() - t0
+    done.set()
+    th.join()
+    for f in (fin, fout, ferr):
+        if f is not subprocess.DEVNULL:
+            f.close()
+    if p.returncode != 0:
+        sys.exit(f"command failed ({p.returncode}): {' '.join(map(str, cmd))}\n"
+                 f"{err_path.read_text(errors='replace')}")
+    print(f"  {name}: {secs:.1f} s", file=sys.stderr, flush=True)
+    return secs, peak[1] / 1024.0, max(peak) / 1024.0
+
+
+def read_float_matrix(path):
+    """A Radiance matrix in binary float (header, blank line, data): (rows, cols, comps,
+    array of float32)."""
+    from array import array
+
+    data = path.read_bytes()
+    end = data.index(b"\n\n") + 2
+    head = dict(l.split("=", 1) for l in data[:end].decode(errors="replace").splitlines()
+                if "=" in l)
+    if head.get("FORMAT", "").strip() != "float":
+        sys.exit(f"{path}: FORMAT={head.get('FORMAT')}, expected float")
+    nr, nc = int(head["NROWS"]), int(head["NCOLS"])
+    ncomp = int(head.get("NCOMP", "1"))
+    arr = array("f")
+    arr.frombytes(data[end:end + 4 * nr * nc * ncomp])
+    if len(arr) != nr * nc * ncomp:
+        sys.exit(f"{path}: {len(arr)} values, the header says {nr}×{nc}×{ncomp}")
+    order = head.get("BYTEORDER", "").strip()
+    if order and (order == "LSB") != (sys.byteorder == "little"):
+        arr.byteswap()
+    return nr, nc, ncomp, arr
+
+
+def month_day(text):
+    m, d = (int(v) for v in text.split("-"))
+    return m, d
+
+
+def two_phase_only(a):
+    """The 2-phase year (or period) of the speed bench: converts the scene, runs epw2wea,
+    gendaymtx -m 1, rfluxmtx, dctimestep, rmtxop (binary float matrices), times each stage
+    and measures its memory, computes DA/sDA/UDI with the occupancy daystep uses
+    (annual_metrics) and writes it all to --json; the illuminance (timesteps × sensors,
+    native float32) to illuminance.f32 beside it."""
+    env, bindir, _ = radiance_env()
+    scene_path = Path(a.scene).resolve()
+    work = Path(a.work) if a.work else REPO / "target/bench-annual/radiance" / scene_path.parent.name
+    work.mkdir(parents=True, exist_ok=True)
+    opts = a.dc_opts or BENCH_DC_OPTS
+    t_all = time.perf_counter()
+
+    # Scene, as the validation converts it.
+    t0 = time.perf_counter()
+    sc = tomllib.loads(scene_path.read_text())
+    up, north = sc.get("up", "z"), float(sc.get("north_deg", 0.0))
+    rho_g = float(sc.get("ground_reflectance", 0.2))
+    tris, mats = read_obj(scene_path.parent / sc["geometry"], up, north)
+    sensors, _ = read_pts(scene_path.parent / sc["sensors"], up, north)
+    write_radiance_scene(tris, mats, work / "scene.rad")
+    (work / "sensors.pts").write_text("".join(
+        f"{p[0]:.9g} {p[1]:.9g} {p[2]:.9g} {d[0]:.9g} {d[1]:.9g} {d[2]:.9g}\n"
+        for _, p, d in sensors))
+    (work / "receiver.rad").write_text(
+        "#@rfluxmtx h=u u=Y\nvoid glow ground_glow\n0\n0\n4 1 1 1 0\n"
+        "ground_glow source ground\n0\n0\n4 0 0 -1 180\n"
+        "#@rfluxmtx h=r1 u=Y\nvoid glow sky_glow\n0\n0\n4 1 1 1 0\n"
+        "sky_glow source sky\n0\n0\n4 0 0 1 180\n")
+    t_convert = time.perf_counter() - t0
+
+    stages, commands = [], []
+
+    def stage(name, cmd, stdin=None, stdout=None):
+        secs, rss_proc, rss_tree = run_measured(name, cmd, env, work, stdin, stdout)
+        stages.append({"stage": name, "seconds": secs, "rss_process_mb": rss_proc,
+                       "rss_tree_mb": rss_tree})
+        cmd_text = " ".join(str(c) for c in cmd)
+        if stdin:
+            cmd_text += f" < {Path(stdin).name}"
+        if stdout:
+            cmd_text += f" > {Path(stdout).name}"
+        commands.append(cmd_text)
+
+    g = f"{rho_g}"
+    t_rad = time.perf_counter()
+    stage("epw2wea", ["epw2wea", Path(a.weather).resolve(), "weather_full.wea"])
+    # The period: the WEA rows from --start to --end (month-day, inclusive).
+    lines = (work / "weather_full.wea").read_text().splitlines()
+    head, rows = lines[:6], [l for l in lines[6:] if len(l.split()) >= 5]
+    lo = month_day(a.start) if a.start else (1, 1)
+    hi = month_day(a.end) if a.end else (12, 31)
+    rows = [l for l in rows if lo <= (int(l.split()[0]), int(l.split()[1])) <= hi]
+    if not rows:
+        sys.exit(f"no weather rows from {lo} to {hi}")
+    (work / "weather.wea").write_text("\n".join(head + rows) + "\n")
+    stage("gendaymtx", ["gendaymtx", "-m", "1", "-of", "-g", g, g, g, "weather.wea"],
+          stdout=work / "sky.mtx")
+    stage("rfluxmtx", ["rfluxmtx", "-I+", "-n", str(a.nproc)] + opts.split()
+          + ["-faf", "-", "receiver.rad", "scene.rad"],
+          stdin=work / "sensors.pts", stdout=work / "dc.mtx")
+    stage("dctimestep", ["dctimestep", "-of", "dc.mtx", "sky.mtx"], stdout=work / "ts.mtx")
+    stage("rmtxop", ["rmtxop", "-ff", "-t", "-c", "47.435", "119.93", "11.635", "ts.mtx"],
+          stdout=work / "ill.mtx")
+    t_rad = time.perf_counter() - t_rad
+    (work / "ts.mtx").unlink()  # timesteps × sensors × RGB: the largest file, not needed
+
+    nr, nc, ncomp, arr = read_float_matrix(work / "ill.mtx")
+    if ncomp != 1 or nr != len(rows) or nc != len(sensors):
+        sys.exit(f"ill.mtx is {nr}×{nc}×{ncomp}, expected {len(rows)}×{len(sensors)}×1")
+    ill_path = Path(a.json).with_name("illuminance.f32") if a.json else work / "illuminance.f32"
+    with open(ill_path, "wb") as f:
+        arr.tofile(f)
+    times = [[int(l.split()[0]), int(l.split()[1]), float(l.split()[2])] for l in rows]
+    table = [arr[t * nc:(t + 1) * nc] for t in range(nr)]
+    metrics, occ = annual_metrics(table, [h for _, _, h in times])
+
+    from importlib.metadata import version
+    out = {
+        "scene": str(scene_path),
+        "weather": str(Path(a.weather).resolve()),
+        "triangles": len(tris),
+        "sensors": len(sensors),
+        "timesteps": nr,
+        "occupied_steps": len(occ),
+        "times": times,
+        "dc_opts": opts,
+        "nproc": a.nproc,
+        "pyradiance": version("pyradiance"),
+        "radiance": run(["rtrace", "-version"], env).strip(),
+        "convert_seconds": t_convert,
+        "radiance_seconds": t_rad,
+        "wall_seconds": time.perf_counter() - t_all,
+        "rss_process_mb": max(s["rss_process_mb"] for s in stages),
+        "rss_tree_mb": max(s["rss_tree_mb"] for s in stages),
+        "stages": stages,
+        "commands": commands,
+        "metrics": metrics,
+        "illuminance_f32": str(ill_path),
+        "work": str(work),
+    }
+    text = json.dumps(out, indent=1)
+    if a.json:
+        Path(a.json).write_text(text + "\n")
+    else:
+        print(text)
+    return 0
+
+
 # The outdoor bench's target for daystep default (docs/validation.md, "Outdoors").
 TARGET_RMS, TARGET_COVERAGE = 3.0, 90.0
 
@@ -544,7 +764,18 @@ def main():
                     help="Radiance panes: glass (reflects 8 %% at normal incidence, more "
                          "at grazing; daystep models that too) or, as a diagnostic, a "
                          "BRTDfunc with glass's transmittance and no reflection")
+    ap.add_argument("--two-phase-only", action="store_true",
+                    help="only the speed bench's 2-phase run (`cargo bench --bench annual` "
+                         "calls it): convert --scene, run gendaymtx/rfluxmtx/dctimestep/"
+                         "rmtxop on --weather, time each stage, write --json")
+    ap.add_argument("--json", help="with --two-phase-only: where to write the results")
+    ap.add_argument("--start", help="with --two-phase-only: first day MM-DD (default 01-01)")
+    ap.add_argument("--end", help="with --two-phase-only: last day MM-DD (default 12-31)")
+    ap.add_argument("--dc-opts", help="with --two-phase-only: rfluxmtx settings instead of "
+                    f"'{BENCH_DC_OPTS}'")
     a = ap.parse_args()
+    if a.two_phase_only:
+        return two_phase_only(a)
 
     env, bindir, libdir = radiance_env()
     exe = Path(a.daystep)
