@@ -149,6 +149,15 @@ fn resumed_and_sharded_runs_equal_one_run() {
         .collect();
     let merged = d.path().join("merged");
     merge(&shards, &merged, 60, &Default::default()).unwrap();
+    // A missing shard is an error naming it, not a shorter series.
+    let e = merge(
+        &shards[1..],
+        &d.path().join("short"),
+        60,
+        &Default::default(),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("shard 1/3 is missing"), "{e}");
     for f in OUTPUTS {
         assert_eq!(read(&one, f), read(&merged, f), "{f} after merge");
     }
@@ -505,4 +514,29 @@ fn surfaces_report_incident_and_transmitted_solar_per_group() {
             row[2]
         );
     }
+}
+
+#[test]
+fn a_run_cut_between_its_final_renames_resumes() {
+    // Killed after `illuminance.csv` was renamed into place and before `direct_sun.csv`
+    // was: the rerun must not fail on the partial file it has just started.
+    let d = tempfile::tempdir().unwrap();
+    let (scene, weather, q, store) = setup(d.path());
+    let go = AtomicBool::new(false);
+    let quiet = |_: usize, _: usize| {};
+    let control = RunControl {
+        stop: &go,
+        progress: &quiet,
+    };
+    let out = d.path().join("run");
+    let o = opts(("2021-03-20", "2021-03-20"), (1, 1));
+    run_annual(&scene, &weather, &q, &store, &out, &o, &control).unwrap();
+    let want = read(&out, "direct_sun.csv");
+    std::fs::rename(
+        out.join("direct_sun.csv"),
+        out.join("direct_sun.csv.partial"),
+    )
+    .unwrap();
+    run_annual(&scene, &weather, &q, &store, &out, &o, &control).unwrap();
+    assert_eq!(read(&out, "direct_sun.csv"), want);
 }

@@ -165,6 +165,10 @@ impl IlluminanceWriter {
         };
         let h = w.header.clone();
         w.write(h.as_bytes())?;
+        // On disk at once: a resume that re-reads a file it has just started (a run cut
+        // between its final renames) must find the header.
+        let p = &w.partial;
+        w.out.flush().map_err(|e| Error::io(p, e))?;
         Ok(w)
     }
 

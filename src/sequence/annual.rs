@@ -488,6 +488,7 @@ pub fn merge(
     step_minutes: u32,
     params: &MetricParams,
 ) -> Result<()> {
+    check_shards(parts)?;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     for f in ["illuminance.csv", "direct_sun.csv", "surfaces.csv"] {
         let files: Vec<_> = parts.iter().map(|p| p.join(f)).collect();
@@ -498,6 +499,52 @@ pub fn merge(
         export::merge_illuminance(&files, &out.join(f))?;
     }
     write_metrics(out, step_minutes, params)
+}
+
+/// Every shard k/n of one study must be given once: a missing shard whose days are only
+/// at the ends of the period would otherwise merge into a shorter series without notice.
+/// Reads each folder's `report.json` (folders without one are not checked).
+fn check_shards(parts: &[std::path::PathBuf]) -> Result<()> {
+    let mut seen: Vec<(u32, u32, &std::path::PathBuf)> = Vec::new();
+    for p in parts {
+        let path = p.join("report.json");
+        let Ok(text) = std::fs::read_to_string(&path) else {
+            continue;
+        };
+        let shard = serde_json::from_str::<serde_json::Value>(&text)
+            .ok()
+            .and_then(|v| v.get("shard").and_then(|s| s.as_str()).map(str::to_owned));
+        let Some((k, n)) = shard.as_deref().and_then(|s| s.split_once('/')) else {
+            continue;
+        };
+        if let (Ok(k), Ok(n)) = (k.parse::<u32>(), n.parse::<u32>()) {
+            seen.push((k, n, p));
+        }
+    }
+    let Some(&(_, n, _)) = seen.first() else {
+        return Ok(());
+    };
+    if let Some((k, m, p)) = seen.iter().find(|s| s.1 != n) {
+        return Err(Error::input(
+            &p.join("report.json"),
+            None,
+            Some(&format!("{k}/{m}")),
+            format!("shard of {m}, but the first folder is a shard of {n}"),
+        ));
+    }
+    if seen.len() == parts.len() {
+        for k in 1..=n {
+            if !seen.iter().any(|s| s.0 == k) {
+                return Err(Error::input(
+                    parts[0].join("report.json"),
+                    None,
+                    Some(&format!("{k}/{n}")),
+                    format!("shard {k}/{n} is missing: merge needs all {n} shard folders"),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// What a step needs.
