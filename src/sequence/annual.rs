@@ -526,7 +526,7 @@ fn check_shards(parts: &[std::path::PathBuf]) -> Result<()> {
     };
     if let Some((k, m, p)) = seen.iter().find(|s| s.1 != n) {
         return Err(Error::input(
-            &p.join("report.json"),
+            p.join("report.json"),
             None,
             Some(&format!("{k}/{m}")),
             format!("shard of {m}, but the first folder is a shard of {n}"),
