@@ -166,36 +166,46 @@ impl Coefficients {
         let store = dirs.store();
         let hash = coefficient_hash(scene, dirs, op);
         // The sources of every step, deduplicated by key (deterministic order).
-        let per_step: Vec<(Option<Sky>, BTreeMap<SourceKey, Source>)> = steps
+        // Folded per thread and merged, so the year's per-step source lists are never all
+        // held at once. A key's source is the same direction and vertices whichever step
+        // it came from (only those are read here), so the merge order does not matter.
+        type Acc = (BTreeMap<SourceKey, Source>, Vec<(usize, Sky)>);
+        let (wanted, mut indexed): Acc = steps
             .par_iter()
-            .map(|(at, spec)| {
-                let mut m = BTreeMap::new();
-                let Some((sky, s)) = step_sources(scene, quality, at, spec) else {
-                    return (None, m);
-                };
-                {
-                    for src in s {
-                        match src.key {
-                            SourceKey::Sun(_) => {
+            .enumerate()
+            .fold(
+                || (BTreeMap::new(), Vec::new()),
+                |(mut m, mut skies): Acc, (i, (at, spec))| {
+                    if let Some((sky, s)) = step_sources(scene, quality, at, spec) {
+                        for src in s {
+                            if let SourceKey::Sun(_) = src.key {
                                 for (v, _) in grid.corners(src.true_direction) {
                                     let gs = grid.source(v);
-                                    m.insert(gs.key, gs);
+                                    m.entry(gs.key).or_insert(gs);
                                 }
-                            }
-                            key => {
-                                m.insert(key, src);
+                            } else {
+                                m.entry(src.key).or_insert(src);
                             }
                         }
+                        skies.push((i, sky));
                     }
-                }
-                (Some(sky), m)
-            })
-            .collect();
-        let mut wanted: BTreeMap<SourceKey, Source> = BTreeMap::new();
-        let mut skies = Vec::with_capacity(steps.len());
-        for (sky, m) in per_step {
-            wanted.extend(m);
-            skies.push(sky);
+                    (m, skies)
+                },
+            )
+            .reduce(
+                || (BTreeMap::new(), Vec::new()),
+                |(mut a, mut sa), (b, sb)| {
+                    for (k, v) in b {
+                        a.entry(k).or_insert(v);
+                    }
+                    sa.extend(sb);
+                    (a, sa)
+                },
+            );
+        indexed.sort_by_key(|e| e.0);
+        let mut skies: Vec<Option<Sky>> = (0..steps.len()).map(|_| None).collect();
+        for (i, sky) in indexed {
+            skies[i] = Some(sky);
         }
         let mut stats = CoefficientStats {
             nodes: wanted.values().filter(|s| !s.is_sun()).count(),
