@@ -41,7 +41,7 @@ const DAYS_PER_BATCH: usize = 8;
 /// Default memory for the adjoint sensor responses held at once while daylight
 /// coefficients are computed ([`AnnualOptions::response_max_bytes`]): sensors are solved in
 /// blocks that fit it.
-pub const RESPONSE_MAX_BYTES: u64 = 256 << 20;
+pub const RESPONSE_MAX_BYTES: u64 = 512 << 20;
 
 /// What an annual run is asked to do besides the defaults.
 #[derive(Clone, Debug)]
