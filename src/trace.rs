@@ -316,6 +316,41 @@ impl Tracer {
         self.walk(origin, dir, incidence, Rgb::ONE).transmission()
     }
 
+    /// The glazing triangles the ray `origin + t·dir` crosses before anything opaque, in
+    /// order; `None` when it crosses more than `max`. With them, the transmission towards a
+    /// source seen along `dir` can be re-evaluated for any angle of incidence without a new
+    /// ray ([`Tracer::transmission_through`]).
+    pub fn panes_along(&self, origin: DVec3, dir: DVec3, max: usize) -> Option<Vec<u32>> {
+        let mut panes = Vec::new();
+        let mut over = false;
+        self.bvh
+            .hits_in_order(origin, dir, T_MIN_M, f64::INFINITY, |h| {
+                if !self.material_of(h.triangle).is_glazing() {
+                    return false;
+                }
+                if panes.len() == max {
+                    over = true;
+                    return false;
+                }
+                panes.push(h.triangle);
+                true
+            });
+        (!over).then_some(panes)
+    }
+
+    /// Π τ(θ) over `panes` with cos θ = |n · incidence|, in order: what
+    /// [`Tracer::transmission_for`] multiplies along a ray that crosses those panes and
+    /// escapes.
+    pub fn transmission_through(&self, panes: &[u32], incidence: DVec3) -> Rgb {
+        let mut power = Rgb::ONE;
+        for &p in panes {
+            power *= self
+                .material_of(p)
+                .transmittance(self.normal(p).dot(incidence).abs());
+        }
+        power
+    }
+
     /// The glazing mirror: light reaching a receiver from the point `at` on pane `tri`,
     /// travelling along unit `toward` (pane → receiver), was reflected there from the
     /// mirror direction with R(θ) ([`Material::specular_reflectance`]). Walks that
@@ -559,6 +594,39 @@ mod tests {
             ..ModelInput::default()
         };
         Scene::from_model(std::path::Path::new("<t>"), input).unwrap()
+    }
+
+    #[test]
+    fn cached_panes_give_the_transmission_of_a_new_ray_at_any_incidence() {
+        // Up from between the floor and the panes: both panes, then the sky. τ at another
+        // angle of incidence from the cached panes equals a new ray's, bit for bit.
+        let scene = panes_over_floor();
+        let tracer = Tracer::new(&scene);
+        let (o, d) = (
+            DVec3::new(0.3, 0.2, -0.5),
+            DVec3::new(0.2, -0.1, 1.0).normalize(),
+        );
+        let panes = tracer.panes_along(o, d, 4).expect("two panes");
+        assert_eq!(panes.len(), 2);
+        for inc in [
+            d,
+            DVec3::new(0.5, 0.4, 0.7).normalize(),
+            DVec3::new(0.0, 0.99, 0.1).normalize(),
+        ] {
+            assert_eq!(
+                tracer.transmission_through(&panes, inc),
+                tracer.transmission_for(o, d, inc)
+            );
+        }
+        assert!(
+            tracer.panes_along(o, d, 1).is_none(),
+            "more panes than asked for"
+        );
+        // Down onto the floor: no pane before the opaque floor.
+        assert_eq!(
+            tracer.panes_along(DVec3::new(0.0, 0.0, -0.5), -DVec3::Z, 4),
+            Some(vec![])
+        );
     }
 
     #[test]

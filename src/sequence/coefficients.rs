@@ -50,8 +50,12 @@ use std::time::Instant;
 
 /// Section tag of a coefficient record: (parts + 1) × sensors f32.
 const TAG_VALUES: u32 = FIRST_USER_TAG;
+/// Section tag of a sky or ground node's direct rows ([`DIRECT_ROWS`] × sensors f32), a
+/// copy of what its direction record yields: a warm run then reads no direction record
+/// (a large scene's projection leaves are megabytes each).
+const TAG_DIRECT: u32 = FIRST_USER_TAG + 1;
 /// Version of what a coefficient record holds, hashed into its key.
-const COEFFICIENTS_VERSION: u32 = 1;
+const COEFFICIENTS_VERSION: u32 = 2;
 /// Direct rows per node: 4 child responses, their sum, 4 uncertainties.
 const DIRECT_ROWS: usize = 9;
 /// Directions whose mesh weights are held at once while coefficients are computed.
@@ -226,14 +230,19 @@ impl Coefficients {
             .par_iter()
             .map(|src| {
                 let key = record_key(hash, dirs, src, res_of(src))?;
-                let v = store.get(&key)?.section::<f32>(TAG_VALUES).ok()?.to_vec();
+                let r = store.get(&key)?;
+                let v = r.section::<f32>(TAG_VALUES).ok()?.to_vec();
                 if v.len() != (parts + 1) * k {
                     return None;
                 }
                 let direct = if src.is_sun() {
                     Vec::new()
                 } else {
-                    direct_rows(&dirs.sensor_responses(src, res_of(src)), k)
+                    r.section::<f32>(TAG_DIRECT)
+                        .ok()
+                        .filter(|d| d.len() == DIRECT_ROWS * k)
+                        .map(|d| d.to_vec())
+                        .unwrap_or_else(|| direct_rows(&dirs.sensor_responses(src, res_of(src)), k))
                 };
                 Some(NodeData {
                     direct,
@@ -279,10 +288,11 @@ impl Coefficients {
                 let src = &list[i];
                 if let Some(key) = record_key(hash, dirs, src, res_of(src)) {
                     if store.is_enabled() {
-                        store.put(
-                            &key,
-                            &cache::encode(&key, &[Section::of(TAG_VALUES, &nd.indirect)]),
-                        );
+                        let mut sections = vec![Section::of(TAG_VALUES, &nd.indirect)];
+                        if !nd.direct.is_empty() {
+                            sections.push(Section::of(TAG_DIRECT, &nd.direct));
+                        }
+                        store.put(&key, &cache::encode(&key, &sections));
                     }
                 }
                 data[i] = Some(nd);

@@ -18,11 +18,20 @@ use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
-/// Section tag of the per-sensor responses: 16 f64 per sensor (4 children × RGB, then 4
-/// uncertainties); for the sun, child 0 holds the transmission and child 1's first value
-/// is 1 when the ray crossed glazing.
+/// Section tag of a sky or ground node's per-sensor responses: 16 f64 per sensor (4
+/// children × RGB, then 4 uncertainties). Suns use [`TAG_SUN_SENSORS`]; in memory a sun's
+/// child 0 holds the transmission and child 1's first value is 1 when the ray crossed
+/// glazing.
 const TAG_SENSORS: u32 = FIRST_USER_TAG;
 const PER_SENSOR: usize = 16;
+/// Section tag of a sun direction's responses: 9 f64 per sensor (transmission RGB; 1 when
+/// the ray crossed glazing; the number of panes listed, 0 when more than
+/// [`MAX_SUN_PANES`]; up to 4 pane triangle indices). A year meets thousands of sun cells, so they are kept
+/// small.
+const TAG_SUN_SENSORS: u32 = FIRST_USER_TAG + 2;
+const PER_SUN_SENSOR: usize = 9;
+/// Panes a sun ray's record lists (more: τ at the true angle is found by a new ray).
+const MAX_SUN_PANES: usize = 4;
 
 /// What one direction yields.
 #[derive(Clone, Debug, Default)]
@@ -137,13 +146,24 @@ impl<'a> Directions<'a> {
     /// Transmission (RGB) from sensor `k` towards the sun `source`: the cached response,
     /// with glazing τ(θ) re-evaluated at the true (unsnapped) sun direction.
     pub fn sun_transmission(&self, k: usize, source: &Source, response: &NodeResponse) -> Rgb {
-        if response.child[1].x > 0.0 {
-            let s = &self.scene.sensors[k];
-            self.vis
-                .transmission_for(s.position, source.direction, source.true_direction)
-        } else {
-            response.child[0]
+        if response.child[1].x <= 0.0 {
+            return response.child[0];
         }
+        let n = response.child[1].y as usize;
+        if (1..=MAX_SUN_PANES).contains(&n) {
+            // The panes the snapped ray crosses, cached: τ at the true angle, no new ray.
+            let ids = [
+                response.child[2].x,
+                response.child[2].y,
+                response.child[2].z,
+                response.child[3].x,
+            ];
+            let panes: Vec<u32> = ids[..n].iter().map(|&v| v as u32).collect();
+            return self.vis.transmission_through(&panes, source.true_direction);
+        }
+        let s = &self.scene.sensors[k];
+        self.vis
+            .transmission_for(s.position, source.direction, source.true_direction)
     }
 
     /// The quality these directions are computed at.
@@ -196,7 +216,7 @@ impl<'a> Directions<'a> {
         let from_disk = key
             .as_ref()
             .and_then(|k| self.store.get(k))
-            .and_then(|r| self.decode(&r));
+            .and_then(|r| self.decode(&r, source.vertices.is_none()));
         let data = match from_disk {
             Some(d) => {
                 self.from_cache.fetch_add(1, Ordering::Relaxed);
@@ -206,11 +226,12 @@ impl<'a> Directions<'a> {
                 let d = self.compute(source, resolution);
                 if let Some(k) = &key {
                     if self.store.is_enabled() {
-                        let flat = flatten(&d.sensors);
+                        let sun = source.vertices.is_none();
+                        let flat = flatten(&d.sensors, sun);
                         let bytes = cache::encode_direction(
                             k,
                             &d.record,
-                            &[Section::f64s(TAG_SENSORS, &flat)],
+                            &[Section::f64s(tag(sun), &flat)],
                         );
                         self.store.put(k, &bytes);
                     }
@@ -228,9 +249,9 @@ impl<'a> Directions<'a> {
         let cached = RecordKey::for_source(self.hash, source.key, resolution)
             .and_then(|k| self.store.get(&k))
             .and_then(|r| {
-                r.f64s(TAG_SENSORS)
+                r.f64s(tag(source.vertices.is_none()))
                     .ok()
-                    .and_then(|f| unflatten(f, self.scene.sensors.len()))
+                    .and_then(|f| unflatten(f, self.scene.sensors.len(), source.vertices.is_none()))
             });
         match cached {
             Some(s) => {
@@ -271,6 +292,20 @@ impl<'a> Directions<'a> {
                     let (t, glazed) = sun_response(&self.vis, s, source.direction);
                     r.child[0] = t;
                     r.child[1].x = if glazed { 1.0 } else { 0.0 };
+                    if glazed {
+                        if let Some(p) =
+                            self.vis
+                                .panes_along(s.position, source.direction, MAX_SUN_PANES)
+                        {
+                            r.child[1].y = p.len() as f64;
+                            let mut ids = [0.0; MAX_SUN_PANES];
+                            for (slot, id) in ids.iter_mut().zip(p) {
+                                *slot = id as f64;
+                            }
+                            r.child[2] = Rgb::new(ids[0], ids[1], ids[2]);
+                            r.child[3].x = ids[3];
+                        }
+                    }
                     r
                 }
             })
@@ -284,9 +319,9 @@ impl<'a> Directions<'a> {
 
     /// A cached record, or `None` (counted as a rebuild by the store's validation when it
     /// is not ours) if its sections do not fit this scene.
-    fn decode(&self, r: &MappedRecord) -> Option<DirectionData> {
+    fn decode(&self, r: &MappedRecord, sun: bool) -> Option<DirectionData> {
         let record = cache::decode_direction(r).ok()?;
-        let sensors = unflatten(r.f64s(TAG_SENSORS).ok()?, self.scene.sensors.len())?;
+        let sensors = unflatten(r.f64s(tag(sun)).ok()?, self.scene.sensors.len(), sun)?;
         Some(DirectionData {
             record,
             sensors,
@@ -295,15 +330,32 @@ impl<'a> Directions<'a> {
     }
 }
 
-/// The responses of `n` sensors from their flat cached form; `None` when it does not fit.
-fn unflatten(flat: &[f64], n: usize) -> Option<Vec<NodeResponse>> {
-    if flat.len() != PER_SENSOR * n {
+fn tag(sun: bool) -> u32 {
+    if sun {
+        TAG_SUN_SENSORS
+    } else {
+        TAG_SENSORS
+    }
+}
+
+/// The responses of `n` sensors from their flat cached form (a sun's when `sun`); `None`
+/// when it does not fit.
+fn unflatten(flat: &[f64], n: usize, sun: bool) -> Option<Vec<NodeResponse>> {
+    let per = if sun { PER_SUN_SENSOR } else { PER_SENSOR };
+    if flat.len() != per * n {
         return None;
     }
     Some(
-        flat.chunks_exact(PER_SENSOR)
+        flat.chunks_exact(per)
             .map(|c| {
                 let mut r = NodeResponse::default();
+                if sun {
+                    r.child[0] = Rgb::new(c[0], c[1], c[2]);
+                    r.child[1] = Rgb::new(c[3], c[4], 0.0);
+                    r.child[2] = Rgb::new(c[5], c[6], c[7]);
+                    r.child[3].x = c[8];
+                    return r;
+                }
                 for k in 0..4 {
                     r.child[k] = Rgb::new(c[3 * k], c[3 * k + 1], c[3 * k + 2]);
                     r.uncertainty[k] = c[12 + k];
@@ -314,9 +366,17 @@ fn unflatten(flat: &[f64], n: usize) -> Option<Vec<NodeResponse>> {
     )
 }
 
-fn flatten(sensors: &[NodeResponse]) -> Vec<f64> {
-    let mut flat = Vec::with_capacity(PER_SENSOR * sensors.len());
+fn flatten(sensors: &[NodeResponse], sun: bool) -> Vec<f64> {
+    let per = if sun { PER_SUN_SENSOR } else { PER_SENSOR };
+    let mut flat = Vec::with_capacity(per * sensors.len());
     for n in sensors {
+        if sun {
+            flat.extend_from_slice(&n.child[0].to_array());
+            flat.extend_from_slice(&[n.child[1].x, n.child[1].y]);
+            flat.extend_from_slice(&n.child[2].to_array());
+            flat.push(n.child[3].x);
+            continue;
+        }
         for c in &n.child {
             flat.extend_from_slice(&c.to_array());
         }
