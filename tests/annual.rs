@@ -389,6 +389,16 @@ fn daylight_coefficients_agree_with_forward_solves_over_two_days() {
     );
     let c = rc.coefficients.expect("coefficient counters");
     assert!(c.nodes > 0 && c.sun_grid_vertices > 0 && c.computed == c.nodes + c.sun_grid_vertices);
+    assert!(c.operator_needed);
+    // Again from the warm cache: every coefficient read, the operator never needed, the
+    // same bytes.
+    let (rw, warm) = run("warm", true);
+    let w = rw.coefficients.expect("coefficient counters");
+    assert_eq!(
+        (w.computed, w.from_cache, w.operator_needed),
+        (0, c.computed, false)
+    );
+    assert_eq!(warm, coefficients);
     let mut rel: Vec<f64> = Vec::new();
     for (a, f) in coefficients.iter().zip(&forward) {
         for (x, y) in a.iter().zip(f) {

@@ -117,6 +117,7 @@ fn daylight_coefficients_equal_forward_solves_within_their_stated_errors() {
     let opts = EngineOptions {
         surfaces: false,
         response_max_bytes: 64 << 20,
+        defer_operator: false,
     };
     let forward = Engine::new(&scene, &q, &store, &opts);
     let mut dc = Engine::new(&scene, &q, &store, &opts);

@@ -154,27 +154,7 @@ impl Transport {
             .map(|&(r, e)| (r, self.rho[r as usize] * e))
             .filter(|(_, v)| *v != Rgb::ZERO)
             .collect();
-        let mut acc: Vec<(u32, Rgb)> = s
-            .iter()
-            .map(|&(r, v)| {
-                (
-                    self.mesh.coarse_of[r as usize],
-                    v * self.mesh.area[r as usize],
-                )
-            })
-            .collect();
-        acc.sort_by_key(|e| e.0);
-        let mut coarse: Vec<(u32, Rgb)> = Vec::new();
-        for (c, v) in acc {
-            match coarse.last_mut() {
-                Some((lc, lv)) if *lc == c => *lv += v,
-                _ => coarse.push((c, v)),
-            }
-        }
-        for (c, v) in &mut coarse {
-            let a = self.coarse_area[*c as usize];
-            *v = if a > 0.0 { *v / a } else { Rgb::ZERO };
-        }
+        let coarse = self.coarse_source(&s);
         let weigh = |l: Vec<(u32, Rgb)>| -> Vec<(u32, [f32; 3])> {
             l.into_iter()
                 .map(|(r, v)| {

@@ -137,23 +137,7 @@ impl SensorResponse {
 
     fn apply_sparse(&self, op: &Transport, s: &[(u32, Rgb)]) -> Vec<Vec<f32>> {
         let k = self.sensors;
-        // The coarse level's source: area averages over each coarse row's children.
-        let mut acc: Vec<(u32, Rgb)> = s
-            .iter()
-            .map(|&(r, v)| (op.mesh.coarse_of[r as usize], v * op.mesh.area[r as usize]))
-            .collect();
-        acc.sort_by_key(|e| e.0);
-        let mut coarse: Vec<(u32, Rgb)> = Vec::new();
-        for (c, v) in acc {
-            match coarse.last_mut() {
-                Some((lc, lv)) if *lc == c => *lv += v,
-                _ => coarse.push((c, v)),
-            }
-        }
-        for (c, v) in &mut coarse {
-            let a = op.coarse_area[*c as usize];
-            *v = if a > 0.0 { *v / a } else { Rgb::ZERO };
-        }
+        let coarse = op.coarse_source(s);
         self.x
             .iter()
             .enumerate()
@@ -225,6 +209,35 @@ impl SensorResponse {
                 TransportSensor::from_parts(&fine, coarse)
             })
             .collect()
+    }
+}
+
+impl Transport {
+    /// The coarse level's source of a sparse fine source `s` ((row, value)): the area
+    /// average over each coarse row's children, as [`Transport::solve`] takes it.
+    pub(super) fn coarse_source(&self, s: &[(u32, Rgb)]) -> Vec<(u32, Rgb)> {
+        let mut acc: Vec<(u32, Rgb)> = s
+            .iter()
+            .map(|&(r, v)| {
+                (
+                    self.mesh.coarse_of[r as usize],
+                    v * self.mesh.area[r as usize],
+                )
+            })
+            .collect();
+        acc.sort_by_key(|e| e.0);
+        let mut coarse: Vec<(u32, Rgb)> = Vec::new();
+        for (c, v) in acc {
+            match coarse.last_mut() {
+                Some((lc, lv)) if *lc == c => *lv += v,
+                _ => coarse.push((c, v)),
+            }
+        }
+        for (c, v) in &mut coarse {
+            let a = self.coarse_area[*c as usize];
+            *v = if a > 0.0 { *v / a } else { Rgb::ZERO };
+        }
+        coarse
     }
 }
 

@@ -349,18 +349,6 @@ impl Transport {
         Some(t)
     }
 
-    /// A hash of every row's reflectance and exitance (what, besides the operator, a
-    /// solution or a daylight coefficient depends on).
-    pub fn reflectance_hash(&self) -> [u8; 32] {
-        let mut h = blake3::Hasher::new();
-        for v in self.rho.iter().chain(&self.emit).chain(&self.coarse_rho) {
-            for c in v.to_array() {
-                h.update(&c.to_bits().to_le_bytes());
-            }
-        }
-        *h.finalize().as_bytes()
-    }
-
     /// Whether any row emits (π·Ke > 0).
     pub fn emits(&self) -> bool {
         self.emit.iter().any(|e| *e != Rgb::ZERO)

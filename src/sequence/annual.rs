@@ -111,7 +111,8 @@ pub struct AnnualReport {
     pub directions: super::directions::DirectionCounts,
     /// Projection cache counters.
     pub cache: crate::cache::CacheStats,
-    /// Whether the interreflection operator came from the cache.
+    /// Whether the interreflection operator came from the cache (false also when the run
+    /// did not need it: every daylight coefficient was cached, `coefficients`).
     pub operator_from_cache: bool,
     /// What computing (or reading) the daylight coefficients did, when the steps use them.
     pub coefficients: Option<super::coefficients::CoefficientStats>,
@@ -232,6 +233,7 @@ pub fn run_annual(
         &EngineOptions {
             surfaces: opts.surfaces,
             response_max_bytes: opts.response_max_bytes,
+            defer_operator: opts.daylight_coefficients,
         },
     );
     if opts.daylight_coefficients && !opts.surfaces {
@@ -247,7 +249,7 @@ pub fn run_annual(
     }
     report.coefficients = engine.coefficient_stats();
     report.operator_from_cache = engine.operator_from_cache();
-    if engine.operator().is_none() {
+    if engine.interreflection() == "none" {
         report.skipped.push(
             "interreflection: every surface is black and nothing emits, or no sensors".into(),
         );

@@ -35,7 +35,7 @@ use super::sky::{build_sky, sources_for};
 use super::step::StepTime;
 use crate::cache::{self, RecordKey, SceneHash, Section, FIRST_USER_TAG};
 use crate::photometry::{from_lux, lux, Rgb};
-use crate::radiosity::{Transport, TransportSensor};
+use crate::radiosity::{Transport, TransportParams, TransportSensor};
 use crate::scene::Scene;
 use crate::sensors::SensorDirect;
 use crate::site::solar_position::solar_position;
@@ -89,6 +89,9 @@ pub struct CoefficientStats {
     pub bytes: u64,
     /// Sun-grid spacing, degrees.
     pub sun_grid_deg: f64,
+    /// Whether the interreflection operator had to be read or built (only when some
+    /// coefficients were missing).
+    pub operator_needed: bool,
     /// Wall time of the preparation, s.
     pub seconds: f64,
 }
@@ -157,7 +160,8 @@ impl Coefficients {
     pub(super) fn prepare(
         scene: &Scene,
         dirs: &Directions,
-        op: &Transport,
+        op: &mut Option<Transport>,
+        load_operator: impl FnOnce() -> Transport,
         steps: &[(StepTime, SkySpec)],
         max_bytes: u64,
     ) -> (Coefficients, Vec<Option<Sky>>) {
@@ -168,7 +172,7 @@ impl Coefficients {
         };
         let k = scene.sensors.len();
         let store = dirs.store();
-        let hash = coefficient_hash(scene, dirs, op);
+        let hash = coefficient_hash(scene, dirs, &quality.transport);
         // The sources of every step, deduplicated by key (deterministic order).
         // Folded per thread and merged, so the year's per-step source lists are never all
         // held at once. A key's source is the same direction and vertices whichever step
@@ -217,7 +221,7 @@ impl Coefficients {
             sun_grid_deg: grid.spacing_deg,
             ..CoefficientStats::default()
         };
-        let parts = op.params.parts.max(2) as usize;
+        let parts = quality.transport.parts.max(2) as usize;
         let list: Vec<Source> = wanted.into_values().collect();
         // Grid vertices feed only the interreflection mesh (0.25 m² rows, not shadows on
         // sensors), so they are projected at the sky nodes' resolution.
@@ -253,9 +257,12 @@ impl Coefficients {
         let todo: Vec<usize> = (0..list.len()).filter(|&i| data[i].is_none()).collect();
         stats.from_cache = list.len() - todo.len();
         stats.computed = todo.len();
+        stats.operator_needed = !todo.is_empty();
         if !todo.is_empty() {
             // Sensors in blocks that fit the budget; each block's adjoint responses turn
             // every missing direction's mesh irradiance into its coefficients.
+            // The operator only now: a run whose coefficients are all cached never reads it.
+            let op: &Transport = op.get_or_insert_with(load_operator);
             let block = op.adjoint_block_size(max_bytes);
             stats.block_sensors = block.min(k);
             let mut fresh: Vec<NodeData> = todo
@@ -468,13 +475,23 @@ fn axpy(y: &mut [f32], a: f32, x: &[f32]) {
 }
 
 /// What coefficient records depend on: the directions' hash (geometry, glazing, sensors,
-/// projection parameters), the operator's key, and the reflectance of every mesh row.
-fn coefficient_hash(scene: &Scene, dirs: &Directions, op: &Transport) -> SceneHash {
+/// projection parameters), the operator's key, and every triangle's reflectance and
+/// emission.
+fn coefficient_hash(scene: &Scene, dirs: &Directions, params: &TransportParams) -> SceneHash {
     let mut extra = b"daylight coefficients v".to_vec();
     extra.extend_from_slice(&COEFFICIENTS_VERSION.to_le_bytes());
     extra.extend_from_slice(&dirs.hash().0);
-    extra.extend_from_slice(&super::operator::key(scene, &op.params).to_bytes());
-    extra.extend_from_slice(&op.reflectance_hash());
+    extra.extend_from_slice(&super::operator::key(scene, params).to_bytes());
+    // Each triangle's reflectance and emission: what, with the mesh the operator's key
+    // fixes, sets every row's ρ and exitance.
+    for t in &scene.triangles {
+        let m = &scene.materials[t.material as usize];
+        for v in [m.reflectance(), m.ke] {
+            for c in v.to_array() {
+                extra.extend_from_slice(&c.to_bits().to_le_bytes());
+            }
+        }
+    }
     extra.extend_from_slice(&(crate::radiosity::response::BLOCK as u64).to_le_bytes());
     cache::scene_hash(scene, &dirs.quality().projection, &extra)
 }

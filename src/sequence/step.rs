@@ -51,6 +51,10 @@ pub struct EngineOptions {
     /// Memory allowed for adjoint sensor responses while daylight coefficients are
     /// computed ([`Engine::prepare`]), bytes.
     pub response_max_bytes: u64,
+    /// Do not read or build the interreflection operator in [`Engine::new`]:
+    /// [`Engine::prepare`] reads it only when some daylight coefficients are missing (a
+    /// warm annual run never needs it), or when the steps will solve forward after all.
+    pub defer_operator: bool,
 }
 
 /// When a step is: the instant in UTC and the site's local standard time.
@@ -104,6 +108,8 @@ pub struct Engine<'a> {
     coarse: Directions<'a>,
     operator: Option<Transport>,
     operator_from_cache: bool,
+    /// The operator is wanted but not read yet ([`EngineOptions::defer_operator`]).
+    operator_deferred: bool,
     setup: StageTimes,
     surfaces: Option<SurfaceMap>,
     mesh_memo: MeshMemo,
@@ -158,7 +164,8 @@ impl<'a> Engine<'a> {
         let tracer = Arc::new(setup.time("tracer", || Tracer::new(scene)));
         // The surface output needs the operator's mesh (its columns) even in a black scene.
         let wanted = (needs_interreflection(scene) && !scene.sensors.is_empty()) || opts.surfaces;
-        let (operator, operator_from_cache) = if wanted {
+        let defer = wanted && opts.defer_operator && !opts.surfaces;
+        let (operator, operator_from_cache) = if wanted && !defer {
             let (t, cached) = setup.time("operator", || {
                 super::operator::transport(scene, &quality.transport, store, &tracer)
             });
@@ -176,6 +183,7 @@ impl<'a> Engine<'a> {
             coarse: Directions::sensors_only(scene, &quality.coarser(), store, tracer.clone()),
             operator,
             operator_from_cache,
+            operator_deferred: defer,
             setup,
             surfaces,
             mesh_memo: MeshMemo::default(),
@@ -193,19 +201,33 @@ impl<'a> Engine<'a> {
     /// forward solve) when the scene has no interreflection, when surface output needs
     /// each step's mesh solution, or when something emits.
     pub fn prepare(&mut self, steps: &[(StepTime, SkySpec)]) -> bool {
-        let Some(op) = &self.operator else {
-            return false;
-        };
-        if self.surfaces.is_some() || op.emits() || self.scene.sensors.is_empty() {
+        if self.operator.is_none() && !self.operator_deferred {
             return false;
         }
+        let emits = self.scene.materials.iter().any(|m| m.is_emitter());
+        if self.surfaces.is_some() || emits || self.scene.sensors.is_empty() {
+            self.load_operator();
+            return false;
+        }
+        let (scene, store, tracer) = (self.scene, self.store, &self.tracer);
+        let params = self.dirs.quality().transport;
+        let (setup, from_cache) = (&mut self.setup, &mut self.operator_from_cache);
+        let load = || {
+            let (t, cached) = setup.time("operator", || {
+                super::operator::transport(scene, &params, store, tracer)
+            });
+            *from_cache = cached;
+            t
+        };
         let (c, skies) = Coefficients::prepare(
             self.scene,
             &self.dirs,
-            op,
+            &mut self.operator,
+            load,
             steps,
             self.opts.response_max_bytes,
         );
+        self.operator_deferred = self.operator.is_none();
         self.setup.add("daylight_coefficients", c.stats.seconds);
         let mut memo = self.skies.lock().expect("sky memo");
         for ((at, spec), sky) in steps.iter().zip(skies) {
@@ -222,6 +244,20 @@ impl<'a> Engine<'a> {
         );
         self.coefficients = Some((c, sun));
         true
+    }
+
+    /// Reads (or builds) a deferred operator: what forward steps need.
+    fn load_operator(&mut self) {
+        if self.operator_deferred && self.operator.is_none() {
+            let (scene, store, tracer) = (self.scene, self.store, &self.tracer);
+            let params = self.dirs.quality().transport;
+            let (t, cached) = self.setup.time("operator", || {
+                super::operator::transport(scene, &params, store, tracer)
+            });
+            self.operator = Some(t);
+            self.operator_from_cache = cached;
+        }
+        self.operator_deferred = false;
     }
 
     /// What preparing the daylight coefficients did, when the steps use them.
@@ -268,8 +304,8 @@ impl<'a> Engine<'a> {
     /// "none".
     pub fn interreflection(&self) -> &'static str {
         match (&self.operator, &self.coefficients) {
-            (None, _) => "none",
-            (Some(_), Some(_)) => "daylight coefficients",
+            (_, Some(_)) => "daylight coefficients",
+            (None, None) => "none",
             (Some(_), None) => "forward",
         }
     }
@@ -352,8 +388,7 @@ impl<'a> Engine<'a> {
         let s = times.time("sources", || sources_for(sky, self.dirs.quality()));
         self.note_sources(&s, &mut report);
         let sources = s.sources;
-        if let (Some((c, sun_dirs)), Some(op), false) = (&self.coefficients, &self.operator, detail)
-        {
+        if let (Some((c, sun_dirs)), false) = (&self.coefficients, detail) {
             // 3–7 by daylight coefficients: sums over the cut, no projection, no solve.
             let (sensors, interp) = times.time("coefficients", || {
                 let coarse = sources_for(sky, self.coarse.quality()).sources;
@@ -365,7 +400,7 @@ impl<'a> Engine<'a> {
                     &sun_fine,
                     &sun_coarse,
                     &self.coarse,
-                    op.params.tolerance,
+                    self.dirs.quality().transport.tolerance,
                 )
             });
             report.error_model = ERROR_MODEL.into();
