@@ -73,12 +73,7 @@ impl Transport {
         let solved: Vec<(Vec<f32>, u32)> = jobs
             .par_iter()
             .map(|&(p, l, b)| {
-                let part = &self.parts[p];
-                let (f, g, rho) = if l == 0 {
-                    (&part.f, &part.g, &self.rho[..])
-                } else {
-                    (&part.f_coarse, &part.g_coarse, &self.coarse_rho[..])
-                };
+                let (f, g, rho) = self.level(p, l);
                 adjoint_block(f, g, rho, b..(b + BLOCK).min(k), tol, max)
             })
             .collect();

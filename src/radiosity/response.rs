@@ -66,12 +66,7 @@ impl Transport {
         let solved: Vec<(Vec<f32>, u32)> = jobs
             .par_iter()
             .map(|&(p, l, b)| {
-                let part = &self.parts[p];
-                let (f, g, rho) = if l == 0 {
-                    (&part.f, &part.g, &self.rho[..])
-                } else {
-                    (&part.f_coarse, &part.g_coarse, &self.coarse_rho[..])
-                };
+                let (f, g, rho) = self.level(p, l);
                 let s0 = b * BLOCK;
                 let s1 = (s0 + BLOCK).min(k);
                 adjoint_block(f, g, rho, s0..s1, tol, max)
@@ -213,6 +208,16 @@ impl SensorResponse {
 }
 
 impl Transport {
+    /// Part `p`'s operator, gather and reflectances at level `l` (0 fine, 1 coarse).
+    pub(super) fn level(&self, p: usize, l: usize) -> (&Sparse, &Sparse, &[Rgb]) {
+        let part = &self.parts[p];
+        if l == 0 {
+            (&part.f, &part.g, &self.rho[..])
+        } else {
+            (&part.f_coarse, &part.g_coarse, &self.coarse_rho[..])
+        }
+    }
+
     /// The coarse level's source of a sparse fine source `s` ((row, value)): the area
     /// average over each coarse row's children, as [`Transport::solve`] takes it.
     pub(super) fn coarse_source(&self, s: &[(u32, Rgb)]) -> Vec<(u32, Rgb)> {
