@@ -9,6 +9,7 @@ mod mtl;
 pub mod scene_file;
 pub mod sensors;
 pub mod synthetic;
+pub mod view;
 
 use crate::error::Result;
 use crate::site::Site;
