@@ -349,11 +349,6 @@ impl Transport {
         Some(t)
     }
 
-    /// Whether any row emits (π·Ke > 0).
-    pub fn emits(&self) -> bool {
-        self.emit.iter().any(|e| *e != Rgb::ZERO)
-    }
-
     /// Number of mesh rows (unknowns).
     pub fn rows(&self) -> usize {
         self.mesh.elements.len()

@@ -23,7 +23,7 @@
 //! * **Grey.** Coefficients are illuminance, exact for grey sources (Perez skies, their
 //!   ground glow and the sun, which is what annual runs use).
 //! * **Cache.** A node's interreflected coefficients are a record keyed by the node, the
-//!   operator's key, the mesh's reflectances and the direction's scene hash: a
+//!   operator's key, every triangle's reflectance and emission and the directions' hash: a
 //!   reflectance change recomputes them and reuses the projections and the operator; a
 //!   weather or site change reuses everything.
 
@@ -104,8 +104,6 @@ pub struct Coefficients {
     nodes: HashMap<SourceKey, NodeData>,
     /// Coarser level's nodes: 4 rows of child responses.
     coarse: Mutex<HashMap<SourceKey, std::sync::Arc<Vec<f32>>>>,
-    /// What the coefficient records hash (directions, operator, reflectances).
-    hash: SceneHash,
     /// Preparation counters.
     pub stats: CoefficientStats,
 }
@@ -321,15 +319,9 @@ impl Coefficients {
             grid,
             nodes,
             coarse: Mutex::new(HashMap::new()),
-            hash,
             stats,
         };
         (c, skies)
-    }
-
-    /// The record-key hash of these coefficients (directions, operator, reflectances).
-    pub fn hash(&self) -> SceneHash {
-        self.hash
     }
 
     /// One step's sensor values from the coefficients: `fine` and `coarse` the step's
@@ -452,9 +444,9 @@ impl Coefficients {
         if let Some(d) = self.coarse.lock().expect("coarse lock").get(&src.key) {
             return d.clone();
         }
+        // Only the sensor section of the record, kept here compactly (not also in `dirs`).
         let res = dirs.quality().projection.resolution_for(false);
-        let data = dirs.get(src, res);
-        let d = std::sync::Arc::new(direct_rows(&data.sensors, self.sensors));
+        let d = std::sync::Arc::new(direct_rows(&dirs.sensor_responses(src, res), self.sensors));
         self.coarse
             .lock()
             .expect("coarse lock")

@@ -404,11 +404,7 @@ impl<'a> Engine<'a> {
                 )
             });
             report.error_model = ERROR_MODEL.into();
-            report.max_lux_err = sensors.iter().map(|v| v.lux_err).fold(0.0, f64::max);
-            report.max_relative_err = sensors
-                .iter()
-                .filter_map(|v| v.relative_error(1.0))
-                .fold(0.0, f64::max);
+            note_errors(&sensors, &mut report);
             report.warnings.extend(sky.warnings.iter().cloned());
             report.stage_seconds = times;
             return Step {
@@ -538,11 +534,7 @@ impl<'a> Engine<'a> {
                 SensorValue::estimate(f, c, i, light.iteration_error)
             })
             .collect();
-        report.max_lux_err = values.iter().map(|v| v.lux_err).fold(0.0, f64::max);
-        report.max_relative_err = values
-            .iter()
-            .filter_map(|v| v.relative_error(1.0))
-            .fold(0.0, f64::max);
+        note_errors(&values, report);
         values
     }
 
@@ -628,6 +620,15 @@ impl<'a> Engine<'a> {
             })
             .collect()
     }
+}
+
+/// The report's largest stated error, absolute and relative, over `values`.
+fn note_errors(values: &[SensorValue], report: &mut Report) {
+    report.max_lux_err = values.iter().map(|v| v.lux_err).fold(0.0, f64::max);
+    report.max_relative_err = values
+        .iter()
+        .filter_map(|v| v.relative_error(1.0))
+        .fold(0.0, f64::max);
 }
 
 fn scene_diagonal(scene: &Scene) -> f64 {
