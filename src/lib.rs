@@ -32,7 +32,7 @@
 //! Layers (a module uses only lower layers; `tests/layers.rs` checks it):
 //! L0 error, files, math, photometry · L1 site, scene, weather (scene and weather may use
 //! site) · L2 sky, sources · L3 hierarchy · L4 projection · L5 transfer, cache, trace ·
-//! L6 sensors, radiosity · L7 metrics, export (export may use metrics) · L8 sequence · L9 cli.
+//! L6 sensors, radiosity · L7 metrics, export, render (export may use metrics) · L8 sequence · L9 cli.
 #![warn(missing_docs)]
 #![deny(unsafe_code)] // the one exception: cache::store::map_readonly
 
@@ -64,9 +64,10 @@ pub mod trace; // the one ray tracer: one BVH per geometry, glazing τ(θ) and m
 pub mod radiosity; // global-line interreflection operator, its solve and gather
 pub mod sensors; // sensor illuminance from every source, with error estimate
 
-// L7 results over time
+// L7 results over time, and images
 pub mod metrics; // annual metrics (DA, cDA, UDI, ASE, sDA, DF) as honeybee computes them
 pub mod export; // illuminance.csv (stream, read, merge shards), .ill, metrics.csv, summary.json, surfaces.csv
+pub mod render; // final gather of a step's solution into images; EXR, PNG, falsecolor, previews, glare
 
 // L8 orchestration
 pub mod sequence; // one timestep (step), and the runs made of it

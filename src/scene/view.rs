@@ -182,6 +182,28 @@ impl View {
     }
 
     /// The image's right and up unit vectors.
+    /// The view as Radiance view options (`-vtv -vp x y z -vd … -vu … -vh … -vv … -vs …
+    /// -vl …`), as rvu saves them and image headers (`VIEW=`) carry them.
+    pub fn options(&self) -> String {
+        let t = match self.kind {
+            ViewType::Perspective => 'v',
+            ViewType::Angular => 'a',
+            ViewType::Hemispherical => 'h',
+            ViewType::Parallel => 'l',
+        };
+        let v = |a: DVec3| format!("{} {} {}", a.x, a.y, a.z);
+        format!(
+            "-vt{t} -vp {} -vd {} -vu {} -vh {} -vv {} -vs {} -vl {}",
+            v(self.vp),
+            v(self.vd),
+            v(self.vu),
+            self.vh,
+            self.vv,
+            self.vs,
+            self.vl
+        )
+    }
+
     fn frame(&self) -> (DVec3, DVec3) {
         let right = self.vd.cross(self.vu).normalize();
         (right, right.cross(self.vd).normalize())
@@ -327,5 +349,20 @@ mod tests {
             e.contains("v.vf") && e.contains(":2") && e.contains("-vh 0"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn options_read_back_as_the_same_view() {
+        let v = View::default()
+            .with_options(
+                "-vta -vp 1.5 -2 3.25 -vd 0 -1 0 -vu 0 0 1 -vh 180 -vv 170 -vs 0.1 -vl -0.2",
+                Path::new("cmd"),
+                None,
+            )
+            .unwrap();
+        let back = View::default()
+            .with_options(&v.options(), Path::new("cmd"), None)
+            .unwrap();
+        assert_eq!(back, v);
     }
 }
