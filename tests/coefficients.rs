@@ -118,6 +118,7 @@ fn daylight_coefficients_equal_forward_solves_within_their_stated_errors() {
         surfaces: false,
         response_max_bytes: 64 << 20,
         defer_operator: false,
+        mesh_solution: false,
     };
     let forward = Engine::new(&scene, &q, &store, &opts);
     let mut dc = Engine::new(&scene, &q, &store, &opts);

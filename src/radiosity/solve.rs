@@ -121,6 +121,28 @@ impl Transport {
         state.b.iter().map(|b| b[r]).fold(Rgb::ZERO, |a, x| a + x) / state.b.len() as f64
     }
 
+    /// Number of independent parts the solution holds (their spread is its noise).
+    pub fn parts(&self) -> usize {
+        self.parts.len()
+    }
+
+    /// Radiosity of mesh row `r` in part `p` alone, RGB W/m².
+    pub fn part_radiosity(&self, state: &TransportState, p: usize, r: usize) -> Rgb {
+        state.b[p][r]
+    }
+
+    /// Radiosity of the coarse row containing mesh row `r` (mean over parts), RGB W/m²:
+    /// the one-level-coarser solution the discretisation error is read from.
+    pub fn coarse_radiosity(&self, state: &TransportState, r: usize) -> Rgb {
+        let c = self.mesh.coarse_of[r] as usize;
+        state
+            .b_coarse
+            .iter()
+            .map(|b| b[c])
+            .fold(Rgb::ZERO, |a, x| a + x)
+            / state.b_coarse.len() as f64
+    }
+
     /// Indirect irradiance received by mesh row `r` (mean over parts), RGB W/m².
     pub fn indirect_irradiance(&self, state: &TransportState, r: usize) -> Rgb {
         self.parts

@@ -9,3 +9,6 @@
 pub mod image;
 
 pub use image::{Image, Provenance, Quantity};
+pub mod gather;
+
+pub use gather::{RenderOptions, Solution, ViewGeometry};

@@ -87,6 +87,10 @@ pub struct Scene {
     pub ground_reflectance: f64,
     /// Scene-frame origin in the converted (ENU) model frame, metres: model = scene + origin.
     pub origin: DVec3,
+    /// The model's north rotation (`north_deg`, degrees) applied before the origin.
+    pub north_deg: f64,
+    /// Whether the model files were Y-up (converted by [`y_up_to_z_up`] when read).
+    pub y_up: bool,
     /// Number of degenerate input triangles dropped (zero area, or an area too small or too
     /// large for `f64` to give a unit normal).
     pub dropped_degenerate: usize,
@@ -95,6 +99,21 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// A direction given in the model's files (as a `.pts` direction or a view's `-vd`)
+    /// in the scene frame: Y-up converted, rotated by `north_deg`.
+    pub fn direction_from_model(&self, d: DVec3) -> DVec3 {
+        let d = if self.y_up { y_up_to_z_up(d) } else { d };
+        let (s, c) = self.north_deg.to_radians().sin_cos();
+        DVec3::new(c * d.x - s * d.y, s * d.x + c * d.y, d.z)
+    }
+
+    /// A point given in the model's files (m, as a `.pts` position or a view's `-vp`) in
+    /// the scene frame: converted as [`Self::direction_from_model`], then the origin
+    /// subtracted.
+    pub fn point_from_model(&self, p: DVec3) -> DVec3 {
+        self.direction_from_model(p) - self.origin
+    }
+
     /// Loads `scene.toml` and everything it references.
     ///
     /// # Errors
@@ -369,6 +388,8 @@ impl Scene {
             site: input.site,
             ground_reflectance: input.ground_reflectance,
             origin,
+            north_deg: input.north_deg,
+            y_up: false,
             dropped_degenerate: dropped,
             warnings: Vec::new(),
         };

@@ -82,6 +82,7 @@ pub fn load(path: &Path) -> Result<Scene> {
         faces: parsed.faces,
     };
     let mut scene = Scene::from_model(path, input)?;
+    scene.y_up = parsed.y_up;
     let mut warnings = parsed.warnings;
     warnings.extend(obj_warnings);
     // Each remark once, in order of appearance.

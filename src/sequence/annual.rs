@@ -234,6 +234,7 @@ pub fn run_annual(
             surfaces: opts.surfaces,
             response_max_bytes: opts.response_max_bytes,
             defer_operator: opts.daylight_coefficients,
+            mesh_solution: false,
         },
     );
     if opts.daylight_coefficients && !opts.surfaces {

@@ -23,6 +23,7 @@ pub mod df;
 pub mod convergence;
 pub mod annual;
 pub mod surfaces;
+pub mod render;
 pub mod report;
 
 pub use config::{Quality, SkySpec};

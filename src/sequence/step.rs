@@ -55,6 +55,9 @@ pub struct EngineOptions {
     /// [`Engine::prepare`] reads it only when some daylight coefficients are missing (a
     /// warm annual run never needs it), or when the steps will solve forward after all.
     pub defer_operator: bool,
+    /// Every step's mesh solution is wanted (renders gather from it): the operator is
+    /// built even without sensors, and steps solve forward.
+    pub mesh_solution: bool,
 }
 
 /// When a step is: the instant in UTC and the site's local standard time.
@@ -163,8 +166,10 @@ impl<'a> Engine<'a> {
         // One BVH per run, shared by the sensor responses and the operator's lines.
         let tracer = Arc::new(setup.time("tracer", || Tracer::new(scene)));
         // The surface output needs the operator's mesh (its columns) even in a black scene.
-        let wanted = (needs_interreflection(scene) && !scene.sensors.is_empty()) || opts.surfaces;
-        let defer = wanted && opts.defer_operator && !opts.surfaces;
+        let wanted = (needs_interreflection(scene)
+            && (!scene.sensors.is_empty() || opts.mesh_solution))
+            || opts.surfaces;
+        let defer = wanted && opts.defer_operator && !opts.surfaces && !opts.mesh_solution;
         let (operator, operator_from_cache) = if wanted && !defer {
             let (t, cached) = setup.time("operator", || {
                 super::operator::transport(scene, &quality.transport, store, &tracer)
@@ -205,7 +210,11 @@ impl<'a> Engine<'a> {
             return false;
         }
         let emits = self.scene.materials.iter().any(|m| m.is_emitter());
-        if self.surfaces.is_some() || emits || self.scene.sensors.is_empty() {
+        if self.surfaces.is_some()
+            || emits
+            || self.scene.sensors.is_empty()
+            || self.opts.mesh_solution
+        {
             self.load_operator();
             return false;
         }
@@ -268,6 +277,11 @@ impl<'a> Engine<'a> {
     /// The per-direction data at the run's quality (counters, cache store).
     pub fn directions(&self) -> &Directions<'a> {
         &self.dirs
+    }
+
+    /// The run's ray tracer (one BVH per geometry, shared by every stage).
+    pub fn tracer(&self) -> &Tracer {
+        &self.tracer
     }
 
     /// The interreflection operator, when the scene needs one.

@@ -1,0 +1,542 @@
+//! The final gather (Besuievsky & Martín §6.1): a view-independent solution made into an
+//! image, pixel by pixel.
+//!
+//! Per pixel, `samples` jittered-stratified primary rays (antialiasing) go through the
+//! shared [`Tracer`]: glazing on the way multiplies them by τ(θ), and the first pane they
+//! meet adds its mirror image with R(θ). Where a ray ends on an opaque surface, the
+//! radiance is ρ/π × E + Ke with E made of three parts, as the paper makes it:
+//! - **sun:** one shadow ray towards the sun's true direction, τ(θ) through glazing;
+//! - **sky** (and ground glow): the direct irradiance the step's projections stored on the
+//!   element the point lies in ([`DirectIrradiance::sky`], sun and sky kept apart for
+//!   this), so no sky ray is traced per pixel;
+//! - **interreflection:** re-sampled from the mesh's radiosity by cosine-distributed
+//!   gather rays (the cosine is the per-pixel importance), each reading B of the mesh row
+//!   it meets, with the sensors' rule for the first pane's mirror image.
+//!
+//! A ray leaving the scene shows the sky's radiance (ground glow below the horizon) and the
+//! sun's disc. Everything that depends only on the camera and the geometry (the primary
+//! hits, the gather rays' rows and weights) is a [`ViewGeometry`], built once and applied
+//! to every step of a sequence ([`ViewGeometry::frame`]). Rays come from a counter-based
+//! generator keyed by pixel, so images do not depend on the thread count.
+
+use super::image::{Image, Quantity};
+use crate::hierarchy::{child_of, Hierarchy};
+use crate::math::rng::{mix64, uniform};
+use crate::photometry::{grey, Rgb};
+use crate::radiosity::{Mesh, Transport, TransportState};
+use crate::scene::view::View;
+use crate::scene::Scene;
+use crate::sky::Sky;
+use crate::trace::{barycentric, cosine_direction, End, Outcome, Tracer};
+use crate::transfer::DirectIrradiance;
+use glam::DVec3;
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+/// Angular radius of the sun's disc, radians (0.533° across, Radiance's `gensky` sun).
+pub const SUN_RADIUS_RAD: f64 = 0.533 / 2.0 * PI / 180.0;
+
+/// What to render and how finely.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderOptions {
+    /// Pixels across.
+    pub width: usize,
+    /// Pixels down.
+    pub height: usize,
+    /// Primary rays per pixel (rounded up to a square: stratified n × n jitter).
+    pub samples: u32,
+    /// Interreflection gather rays per pixel, shared among its samples (0: no gather).
+    pub gather_rays: u32,
+    /// Radiance seen, or irradiance on the surfaces seen (`-i`).
+    pub quantity: Quantity,
+    /// Half-width (pixels) of the window over which the gathered interreflection is
+    /// averaged among pixels on the same plane and material (0: none).
+    pub filter_radius: usize,
+    /// Seed of the ray generator.
+    pub seed: u64,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions {
+            width: 512,
+            height: 512,
+            samples: 4,
+            gather_rays: 64,
+            quantity: Quantity::Radiance,
+            filter_radius: 2,
+            seed: 0x5eed_0015,
+        }
+    }
+}
+
+/// One step's view-independent solution, as the gather reads it.
+#[derive(Clone, Copy)]
+pub struct Solution<'a> {
+    /// The sky (its radiance for rays that leave; its sun for shadow rays and the disc).
+    pub sky: &'a Sky,
+    /// The refined elements and their direct irradiance, sun and sky apart (`None`: no
+    /// direct sky on surfaces, e.g. a dark sky).
+    pub direct: Option<(&'a Hierarchy, &'a DirectIrradiance)>,
+    /// The interreflection operator and its solved state (`None`: black scene).
+    pub transport: Option<(&'a Transport, &'a TransportState)>,
+    /// The solve's relative iteration error (adds that fraction of the gathered light to
+    /// the stated error).
+    pub iteration_error: f64,
+}
+
+/// Where one primary sample (or its mirror image in glazing) ended.
+#[derive(Clone, Copy, Debug)]
+enum Kind {
+    /// Left the scene along `dir` with transmission `tau`.
+    Sky { dir: DVec3, tau: [f32; 3] },
+    /// An opaque front face.
+    Surface(Surface),
+    /// A back face (black), absorbed in glazing, or outside a fisheye's circle.
+    Black,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Surface {
+    tri: u32,
+    point: DVec3,
+    /// Transmission from the eye (×R for a mirror image).
+    tau: [f32; 3],
+    /// Its gather rays: `entries[start..start + len]`.
+    start: u32,
+    len: u32,
+}
+
+/// One part of a pixel: a primary sample, or its mirror image, of antialiasing sample `aa`.
+#[derive(Clone, Copy, Debug)]
+struct Sample {
+    aa: u32,
+    kind: Kind,
+}
+
+/// Everything about a camera that does not change from step to step: each pixel's
+/// samples, where they end, and their gather rays' mesh rows and weights.
+pub struct ViewGeometry {
+    opts: RenderOptions,
+    /// Per pixel, its samples: `samples[offsets[p]..offsets[p + 1]]`.
+    offsets: Vec<u32>,
+    samples: Vec<Sample>,
+    /// Per pixel, how many antialiasing samples it has (0: outside the image's circle).
+    aa_count: Vec<u32>,
+    /// Gather entries: mesh row and the irradiance weight of its radiosity (τ / rays).
+    entries: Vec<(u32, [f32; 3])>,
+    /// Rays traced to build it.
+    pub rays: u64,
+}
+
+fn f32s(v: Rgb) -> [f32; 3] {
+    [v.x as f32, v.y as f32, v.z as f32]
+}
+
+fn rgb(v: [f32; 3]) -> Rgb {
+    Rgb::new(f64::from(v[0]), f64::from(v[1]), f64::from(v[2]))
+}
+
+fn isqrt_ceil(n: u32) -> u32 {
+    (f64::from(n.max(1))).sqrt().ceil() as u32
+}
+
+impl ViewGeometry {
+    /// Traces the camera `view` (in the scene frame) through `tracer`, with gather rays
+    /// onto `mesh` (the operator's; `None`: no interreflection to gather).
+    pub fn new(
+        tracer: &Tracer,
+        view: &View,
+        mesh: Option<&Mesh>,
+        opts: &RenderOptions,
+    ) -> ViewGeometry {
+        let (w, h) = (opts.width, opts.height);
+        let per_pixel: Vec<PixelGeometry> = (0..w * h)
+            .into_par_iter()
+            .map(|p| pixel_geometry(tracer, view, mesh, opts, p))
+            .collect();
+        let mut g = ViewGeometry {
+            opts: *opts,
+            offsets: Vec::with_capacity(w * h + 1),
+            samples: Vec::new(),
+            aa_count: Vec::with_capacity(w * h),
+            entries: Vec::new(),
+            rays: 0,
+        };
+        g.offsets.push(0);
+        for (mut samples, entries, aa, rays) in per_pixel {
+            let base = g.entries.len() as u32;
+            for s in &mut samples {
+                if let Kind::Surface(f) = &mut s.kind {
+                    f.start += base;
+                }
+            }
+            g.samples.extend(samples);
+            g.entries.extend(entries);
+            g.offsets.push(g.samples.len() as u32);
+            g.aa_count.push(aa);
+            g.rays += rays;
+        }
+        g
+    }
+
+    /// Bytes the geometry holds (for reports and memory budgets).
+    pub fn bytes(&self) -> usize {
+        self.samples.len() * std::mem::size_of::<Sample>()
+            + self.entries.len() * std::mem::size_of::<(u32, [f32; 3])>()
+            + (self.offsets.len() + self.aa_count.len()) * 4
+    }
+
+    /// The image of one step's `solution`: the gather at the cached points. Traces one
+    /// shadow ray per surface sample towards the sun (none without a sun).
+    pub fn frame(&self, scene: &Scene, tracer: &Tracer, solution: &Solution) -> Image {
+        let (w, h) = (self.opts.width, self.opts.height);
+        let mut img = Image::new(w, h, self.opts.quantity);
+        let sun = solution
+            .sky
+            .sun
+            .filter(|s| s.normal_irradiance != Rgb::ZERO);
+        let sun_disc = 2.0 * PI * (1.0 - SUN_RADIUS_RAD.cos());
+        let irradiance = self.opts.quantity == Quantity::Irradiance;
+        let parts = solution.transport.map_or(0, |(t, _)| t.parts());
+        let px: Vec<PixelOut> = (0..w * h)
+            .into_par_iter()
+            .map(|p| {
+                let n_aa = self.aa_count[p];
+                if n_aa == 0 {
+                    return PixelOut::default();
+                }
+                let samples = &self.samples[self.offsets[p] as usize..self.offsets[p + 1] as usize];
+                let mut per_aa = vec![Rgb::ZERO; n_aa as usize];
+                let mut per_aa_ind = vec![Rgb::ZERO; n_aa as usize];
+                let mut key = None;
+                let mut per_part = vec![Rgb::ZERO; parts];
+                let (mut disc, mut gathered) = (0.0, Rgb::ZERO);
+                for s in samples {
+                    let v = match s.kind {
+                        Kind::Black => Rgb::ZERO,
+                        Kind::Sky { dir, tau } => {
+                            if irradiance {
+                                Rgb::ZERO
+                            } else {
+                                let mut l = solution.sky.radiance(dir);
+                                if let Some(sun) = sun {
+                                    if dir.dot(sun.direction) >= SUN_RADIUS_RAD.cos() {
+                                        l += sun.normal_irradiance / sun_disc;
+                                    }
+                                }
+                                rgb(tau) * l
+                            }
+                        }
+                        Kind::Surface(f) => {
+                            let n = tracer.normal(f.tri);
+                            let m = tracer.material_of(f.tri);
+                            // What turns the surface's irradiance into what the pixel shows.
+                            let k = if irradiance {
+                                Rgb::ONE
+                            } else {
+                                rgb(f.tau) * m.reflectance() / PI
+                            };
+                            let mut e = Rgb::ZERO;
+                            if let Some(sun) = sun {
+                                let c = n.dot(sun.direction);
+                                if c > 0.0 {
+                                    e += sun.normal_irradiance
+                                        * tracer.transmission(f.point, sun.direction)
+                                        * c;
+                                }
+                            }
+                            if let Some((hier, d)) = solution.direct {
+                                let root = scene.triangles[f.tri as usize].v;
+                                let (leaf, parent) =
+                                    leaf_at(hier, f.tri, barycentric(root, f.point));
+                                e += d.sky[leaf as usize];
+                                if let Some(pa) = parent {
+                                    disc +=
+                                        grey(k * (d.sky[leaf as usize] - d.sky[pa as usize])).abs();
+                                }
+                            }
+                            if let Some((t, st)) = solution.transport {
+                                let es =
+                                    &self.entries[f.start as usize..(f.start + f.len) as usize];
+                                let (mut fine, mut coarse) = (Rgb::ZERO, Rgb::ZERO);
+                                for &(row, wt) in es {
+                                    let (r, wt) = (row as usize, rgb(wt));
+                                    fine += wt * t.radiosity(st, r);
+                                    coarse += wt * t.coarse_radiosity(st, r);
+                                    for (q, acc) in per_part.iter_mut().enumerate() {
+                                        *acc += k * wt * t.part_radiosity(st, q, r);
+                                    }
+                                }
+                                e += fine;
+                                disc += grey(k * (fine - coarse)).abs();
+                                gathered += k * fine;
+                                per_aa_ind[s.aa as usize] += k * fine;
+                            }
+                            let pk = plane_key(tracer, f.tri, f.point);
+                            key = match key {
+                                None => Some(pk),
+                                Some(q) if q == pk => Some(q),
+                                _ => Some(0),
+                            };
+                            let own = if irradiance {
+                                Rgb::ZERO
+                            } else {
+                                rgb(f.tau) * m.ke
+                            };
+                            k * e + own
+                        }
+                    };
+                    if !matches!(s.kind, Kind::Surface(_)) {
+                        key = Some(0);
+                    }
+                    per_aa[s.aa as usize] += v;
+                }
+                let n = f64::from(n_aa);
+                let mean = per_aa.iter().fold(Rgb::ZERO, |a, x| a + *x) / n;
+                let ind = per_aa_ind.iter().fold(Rgb::ZERO, |a, x| a + *x) / n;
+                // Variance of the mean over antialiasing samples, of the direct and of the
+                // gathered part apart: the filter below averages the gathered part only.
+                let var_of = |v: &[Rgb], m: Rgb| {
+                    if n_aa > 1 {
+                        v.iter().map(|x| (grey(*x) - grey(m)).powi(2)).sum::<f64>() / (n - 1.0) / n
+                    } else {
+                        0.0
+                    }
+                };
+                let direct: Vec<Rgb> = per_aa
+                    .iter()
+                    .zip(&per_aa_ind)
+                    .map(|(a, b)| *a - *b)
+                    .collect();
+                let var_direct = var_of(&direct, mean - ind);
+                let var_ind = var_of(&per_aa_ind, ind);
+                let var_parts = if parts > 1 {
+                    let pm = per_part.iter().fold(Rgb::ZERO, |a, x| a + *x) / parts as f64;
+                    per_part
+                        .iter()
+                        .map(|x| (grey(*x) - grey(pm)).powi(2))
+                        .sum::<f64>()
+                        / (parts as f64 - 1.0)
+                        / parts as f64
+                        / (n * n)
+                } else {
+                    0.0
+                };
+                PixelOut {
+                    direct: mean - ind,
+                    ind,
+                    var_direct: var_direct + var_parts,
+                    var_ind,
+                    bias: disc / n + solution.iteration_error * grey(gathered).abs() / n,
+                    key: key.unwrap_or(0),
+                    valid: true,
+                }
+            })
+            .collect();
+        let filtered = filter_gathered(&px, w, h, self.opts.filter_radius);
+        for (i, (p, (ind, var_ind))) in px.iter().zip(filtered).enumerate() {
+            img.rgb[i] = p.direct + ind;
+            img.err[i] = (p.var_direct + var_ind).sqrt() + p.bias;
+            img.valid[i] = p.valid;
+        }
+        img
+    }
+}
+
+/// One pixel before the gathered part is filtered.
+#[derive(Clone, Copy, Debug, Default)]
+struct PixelOut {
+    /// Everything but the gathered interreflection (radiance, or irradiance).
+    direct: Rgb,
+    /// The gathered interreflection.
+    ind: Rgb,
+    /// Variance of `direct`'s mean (antialiasing) plus the parts' variance (grey).
+    var_direct: f64,
+    /// Variance of `ind`'s mean over antialiasing samples (grey).
+    var_ind: f64,
+    /// Discretisation and iteration error (grey).
+    bias: f64,
+    /// The plane all its samples lie on (0: several, glazing or sky: not filtered).
+    key: u64,
+    valid: bool,
+}
+
+/// A key of the plane and material of triangle `tri` (never 0): pixels on one plane of one
+/// material share their gathered light in [`filter_gathered`]. The plane's offset is
+/// rounded to 1 mm and its normal to 1e-4.
+fn plane_key(tracer: &Tracer, tri: u32, point: DVec3) -> u64 {
+    let n = tracer.normal(tri);
+    let q = |x: f64, s: f64| (x * s).round() as i64 as u64;
+    let m = tracer.material_of(tri) as *const _ as u64;
+    let h = mix64(
+        q(n.x, 1e4) ^ mix64(q(n.y, 1e4) ^ mix64(q(n.z, 1e4) ^ mix64(q(n.dot(point), 1e3) ^ m))),
+    );
+    h.max(1)
+}
+
+/// The gathered part of each pixel averaged over the pixels within `radius` that lie on
+/// the same plane of the same material, and the variance of that mean. Interreflected
+/// light varies slowly along a plane, so this lowers the gather's noise by about the
+/// number of pixels averaged at a bias far below it; edges, glazing and sky pixels are
+/// left alone. The pixel order does not matter, so neither does the thread count.
+fn filter_gathered(px: &[PixelOut], w: usize, h: usize, radius: usize) -> Vec<(Rgb, f64)> {
+    (0..px.len())
+        .into_par_iter()
+        .map(|i| {
+            let p = px[i];
+            if radius == 0 || p.key == 0 {
+                return (p.ind, p.var_ind);
+            }
+            let (x, y) = (i % w, i / w);
+            let (mut sum, mut var, mut n) = (Rgb::ZERO, 0.0, 0.0);
+            for yy in y.saturating_sub(radius)..(y + radius + 1).min(h) {
+                for xx in x.saturating_sub(radius)..(x + radius + 1).min(w) {
+                    let q = px[yy * w + xx];
+                    if q.key == p.key {
+                        sum += q.ind;
+                        var += q.var_ind;
+                        n += 1.0;
+                    }
+                }
+            }
+            (sum / n, var / (n * n))
+        })
+        .collect()
+}
+
+/// The leaf of `h` under triangle `tri` containing barycentrics `b`, and its parent.
+fn leaf_at(h: &Hierarchy, tri: u32, mut b: [f64; 3]) -> (u32, Option<u32>) {
+    let (mut i, mut parent) = (tri, None);
+    while let Some(fc) = h.elements[i as usize].first_child {
+        parent = Some(i);
+        i = fc + u32::from(child_of(&mut b));
+    }
+    (i, parent)
+}
+
+/// One pixel's samples, its gather entries (offsets local to the pixel), its antialiasing
+/// sample count and the rays traced.
+type PixelGeometry = (Vec<Sample>, Vec<(u32, [f32; 3])>, u32, u64);
+
+/// One pixel's samples, gather entries (pixel-local offsets), antialiasing count and rays.
+fn pixel_geometry(
+    tracer: &Tracer,
+    view: &View,
+    mesh: Option<&Mesh>,
+    opts: &RenderOptions,
+    p: usize,
+) -> PixelGeometry {
+    let (w, h) = (opts.width as f64, opts.height as f64);
+    let (col, row) = ((p % opts.width) as f64, (p / opts.width) as f64);
+    // Outside a fisheye's circle (judged at the pixel's centre): no pixel at all.
+    if view.ray((col + 0.5) / w, 1.0 - (row + 0.5) / h).is_none() {
+        return (Vec::new(), Vec::new(), 0, 0);
+    }
+    let m = isqrt_ceil(opts.samples);
+    let stream = mix64(opts.seed ^ (p as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+    let gather_per = if mesh.is_some() && opts.gather_rays > 0 {
+        isqrt_ceil(opts.gather_rays.div_ceil(m * m))
+    } else {
+        0
+    };
+    let mut samples = Vec::new();
+    let mut entries = Vec::new();
+    let (mut aa, mut rays, mut counter) = (0u32, 0u64, 0u64);
+    let mut next = || {
+        counter += 1;
+        uniform(opts.seed, stream, counter)
+    };
+    for i in 0..m {
+        for j in 0..m {
+            let x = (col + (f64::from(i) + next()) / f64::from(m)) / w;
+            let y = 1.0 - (row + (f64::from(j) + next()) / f64::from(m)) / h;
+            let Some((o, d)) = view.ray(x, y) else {
+                continue;
+            };
+            let out = tracer.trace(o, d, Rgb::ONE);
+            rays += 1;
+            let mut ends = vec![(out, d)];
+            if out.glazing_loss != Rgb::ZERO {
+                if let Some(hit) = tracer.first_hit(o, d).filter(|h| h.glazing) {
+                    if let Some(mo) = tracer.mirror(hit.tri, hit.point, -d, Rgb::ONE) {
+                        let n = tracer.normal(hit.tri);
+                        let c = (-d).dot(n);
+                        ends.push((mo, (n * (2.0 * c) + d).normalize()));
+                        rays += 2;
+                    }
+                }
+            }
+            for (out, dir) in ends {
+                let kind = match out.end {
+                    End::Escaped => Kind::Sky {
+                        dir,
+                        tau: f32s(out.power),
+                    },
+                    End::Front { tri, point, .. } if out.power != Rgb::ZERO => {
+                        let start = entries.len() as u32;
+                        if let Some(mesh) = mesh {
+                            let n = tracer.normal(tri);
+                            rays +=
+                                gather(tracer, mesh, point, n, gather_per, &mut next, &mut entries);
+                        }
+                        Kind::Surface(Surface {
+                            tri,
+                            point,
+                            tau: f32s(out.power),
+                            start,
+                            len: entries.len() as u32 - start,
+                        })
+                    }
+                    _ => Kind::Black,
+                };
+                samples.push(Sample { aa, kind });
+            }
+            aa += 1;
+        }
+    }
+    (samples, entries, aa, rays)
+}
+
+/// `m × m` stratified cosine rays from `point` about `n`: each front face met adds its mesh
+/// row with weight τ/m² (and the first pane's mirror image, as the sensors' gather does).
+/// Returns the rays traced.
+fn gather(
+    tracer: &Tracer,
+    mesh: &Mesh,
+    point: DVec3,
+    n: DVec3,
+    m: u32,
+    next: &mut impl FnMut() -> f64,
+    entries: &mut Vec<(u32, [f32; 3])>,
+) -> u64 {
+    let w = 1.0 / f64::from(m * m);
+    let mut rays = 0;
+    let add = |out: Outcome, entries: &mut Vec<(u32, [f32; 3])>| {
+        if let End::Front { tri, point, .. } = out.end {
+            let root = mesh.hierarchy.elements[tri as usize].vertices;
+            let row = mesh.row_at(tri, barycentric(root, point));
+            entries.push((row, f32s(out.power * w)));
+        }
+    };
+    for i in 0..m {
+        for j in 0..m {
+            let u1 = (f64::from(i) + next()) / f64::from(m);
+            let u2 = (f64::from(j) + next()) / f64::from(m);
+            let (d, _) = cosine_direction(n, u1, u2);
+            let out = tracer.trace(point, d, Rgb::ONE);
+            rays += 1;
+            let met_glazing = out.glazing_loss != Rgb::ZERO;
+            add(out, entries);
+            if let Some(h) = met_glazing.then(|| tracer.first_hit(point, d)).flatten() {
+                if h.glazing {
+                    if let Some(mo) = tracer.mirror(h.tri, h.point, -d, Rgb::ONE) {
+                        add(mo, entries);
+                        rays += 2;
+                    }
+                }
+            }
+        }
+    }
+    rays
+}

@@ -1,0 +1,177 @@
+//! Renders against closed forms: a diffuse plane under a uniform sky reads ρL, a sunlit
+//! plane ρE cos θ/π, a pane seen against the sky τ(θ)L (the published Radiance-glass
+//! table); the `-i` image reads the irradiance; images are the same whatever the thread
+//! count.
+
+use crate::util::*;
+use daystep::cache::Store;
+use daystep::photometry::Rgb;
+use daystep::render::{Image, Quantity, RenderOptions};
+use daystep::scene::view::View;
+use daystep::scene::Scene;
+use daystep::sequence::render::{Camera, Renderer};
+use daystep::sequence::report::Report;
+use daystep::sequence::Quality;
+use daystep::sky::{Sky, Sun};
+use std::f64::consts::PI;
+use std::path::Path;
+
+fn view(text: &str) -> View {
+    View::default()
+        .with_options(text, Path::new("test"), None)
+        .expect("test view")
+}
+
+fn render(scene: &Scene, sky: &Sky, view: View, opts: RenderOptions) -> Image {
+    let store = Store::disabled();
+    let camera = Camera {
+        view,
+        options: opts,
+    };
+    let r = Renderer::new(scene, &Quality::preset("draft").unwrap(), &store, &camera);
+    r.frame_sky(sky, Report::default()).image
+}
+
+fn small(quantity: Quantity) -> RenderOptions {
+    RenderOptions {
+        width: 24,
+        height: 16,
+        samples: 4,
+        gather_rays: 16,
+        quantity,
+        ..RenderOptions::default()
+    }
+}
+
+/// Every valid pixel's grey value is within `rel` of `expected`; returns how many.
+fn all_close(img: &Image, expected: f64, rel: f64) -> usize {
+    let mut n = 0;
+    for (i, v) in img.rgb.iter().enumerate() {
+        if !img.valid[i] {
+            continue;
+        }
+        let g = daystep::photometry::grey(*v);
+        assert!(
+            (g - expected).abs() <= rel * expected,
+            "pixel {i}: {g} against {expected}"
+        );
+        n += 1;
+    }
+    n
+}
+
+fn plane(rho: f64) -> Scene {
+    let mut b = Builder::new();
+    let m = b.material("floor", rho, 0.0);
+    b.hrect(-20.0, 20.0, -20.0, 20.0, 0.0, true, m);
+    b.build()
+}
+
+#[test]
+fn a_diffuse_plane_under_a_uniform_sky_reads_rho_l() {
+    let (rho, l) = (0.5, 10.0);
+    let scene = plane(rho);
+    let sky = sky_of(Some(Box::new(Uniform(l))), None, 0.0);
+    for v in [
+        "-vtl -vp 0 0 5 -vd 0 0 -1 -vu 0 1 0 -vh 8 -vv 6",
+        "-vtv -vp 0 0 3 -vd 0.3 0 -1 -vu 0 1 0 -vh 60 -vv 45",
+        "-vta -vp 0 0 2 -vd 0 0 -1 -vu 0 1 0 -vh 120 -vv 120",
+    ] {
+        let img = render(&scene, &sky, view(v), small(Quantity::Radiance));
+        let n = all_close(&img, rho * l, 0.01);
+        assert!(n > 100, "{v}: {n} pixels");
+        // The -i image reads the irradiance, π L.
+        let img = render(&scene, &sky, view(v), small(Quantity::Irradiance));
+        all_close(&img, PI * l, 0.01);
+    }
+}
+
+#[test]
+fn a_sunlit_plane_reads_rho_e_cos_over_pi() {
+    let (rho, dni, alt) = (0.3, 800.0, 35.0);
+    let scene = plane(rho);
+    let sky = sky_of(
+        None,
+        Some(Sun {
+            direction: daystep::site::direction_from_alt_az(alt, 200.0),
+            normal_irradiance: Rgb::splat(dni),
+        }),
+        0.0,
+    );
+    let cos = (90.0f64 - alt).to_radians().cos();
+    let img = render(
+        &scene,
+        &sky,
+        view("-vtv -vp 0 0 4 -vd 0 0.2 -1 -vu 0 1 0 -vh 50 -vv 40"),
+        small(Quantity::Radiance),
+    );
+    let n = all_close(&img, rho * dni * cos / PI, 1e-9);
+    assert_eq!(n, 24 * 16);
+}
+
+#[test]
+fn a_pane_seen_against_a_uniform_sky_reads_tau_l() {
+    // Published Radiance-glass transmittance for T_n = 0.88 (docs/derivations.md).
+    let table = [(0.0, 0.8800), (30.0, 0.8755), (60.0, 0.7999)];
+    let l = 20.0;
+    let mut b = Builder::new();
+    let g = b.material("glass", 0.0, 0.88);
+    b.hrect(-500.0, 500.0, -500.0, 500.0, 1.0, true, g);
+    let scene = b.build();
+    // Below the pane, its mirror image shows the ground: black here, so only τ L is seen.
+    let sky = sky_of(Some(Box::new(Uniform(l))), None, 0.0);
+    for (zenith, tau) in table {
+        let z = f64::to_radians(zenith);
+        let v = format!(
+            "-vtl -vp 0 0 0 -vd {} 0 {} -vu 0 1 0 -vh 1 -vv 1",
+            z.sin(),
+            z.cos()
+        );
+        let img = render(&scene, &sky, view(&v), small(Quantity::Radiance));
+        // Table rounding (5e-5 in τ) is the tolerance.
+        all_close(&img, tau * l, 6e-5 / tau);
+    }
+}
+
+#[test]
+fn images_do_not_depend_on_the_thread_count() {
+    // A room with a window: gather rays, glazing and sun all take part.
+    let mut b = Builder::new();
+    let (floor, wall, ceiling) = (
+        b.material("f", 0.3, 0.0),
+        b.material("w", 0.5, 0.0),
+        b.material("c", 0.7, 0.0),
+    );
+    b.hrect(0.0, 4.0, 0.0, 4.0, 0.0, true, floor);
+    b.hrect_with_hole(
+        (0.0, 4.0, 0.0, 4.0),
+        (1.5, 2.5, 1.5, 2.5),
+        3.0,
+        false,
+        ceiling,
+    );
+    b.walls_inward(0.0, 4.0, 0.0, 4.0, 0.0, 3.0, wall);
+    let g = b.material("glass", 0.0, 0.8);
+    b.hrect(1.5, 2.5, 1.5, 2.5, 3.0, true, g);
+    let scene = b.build();
+    let sky = sky_of(
+        Some(Box::new(Uniform(30.0))),
+        Some(Sun {
+            direction: daystep::site::direction_from_alt_az(60.0, 170.0),
+            normal_irradiance: Rgb::splat(600.0),
+        }),
+        5.0,
+    );
+    let v = view("-vta -vp 1 1 0.5 -vd 0 0 1 -vu 0 1 0 -vh 180 -vv 180");
+    let run = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| render(&scene, &sky, v, small(Quantity::Radiance)))
+    };
+    let (a, b) = (run(1), run(2));
+    assert!(a.rgb.iter().any(|v| v.x > 0.0));
+    assert_eq!(a.rgb, b.rgb);
+    assert_eq!(a.err, b.err);
+}
