@@ -45,7 +45,7 @@ impl Camera {
 /// A run of renders: the engine of its steps and the camera's geometry, traced once.
 pub struct Renderer<'a> {
     engine: Engine<'a>,
-    scene: &'a Scene,
+
     geometry: ViewGeometry,
     /// Seconds spent tracing the camera's geometry.
     pub geometry_seconds: f64,
@@ -81,7 +81,6 @@ impl<'a> Renderer<'a> {
         Renderer {
             geometry_seconds: t0.elapsed().as_secs_f64(),
             engine,
-            scene,
             geometry,
         }
     }
@@ -103,7 +102,7 @@ impl<'a> Renderer<'a> {
     /// # Errors
     /// Bad sky parameters ([`crate::Error::Input`]).
     pub fn frame(&self, at: &StepTime, spec: &SkySpec) -> Result<Frame> {
-        let mut step = self.engine.step(at, spec, None, true)?;
+        let mut step = self.engine.step(at, spec, None, false)?;
         let sky = step.sky.take().expect("a step builds its sky");
         let mut frame = self.gather(step, &sky);
         frame.step.sky = Some(sky);
@@ -112,28 +111,21 @@ impl<'a> Renderer<'a> {
 
     /// Renders a sky already built (tests, and skies given in code).
     pub fn frame_sky(&self, sky: &Sky, report: Report) -> Frame {
-        let step = self.engine.step_sky(sky, None, true, report, None);
+        let step = self.engine.step_sky(sky, None, false, report, None);
         self.gather(step, sky)
     }
 
     fn gather(&self, step: Step, sky: &Sky) -> Frame {
         let t0 = Instant::now();
-        let (h, d) = step
-            .elements
-            .as_ref()
-            .expect("render steps ask for elements");
         let solution = Solution {
             sky,
-            direct: Some((h, d)),
             transport: self.engine.operator().zip(step.state.as_ref()),
             iteration_error: step
                 .report
                 .transport_solve
                 .map_or(0.0, |r| r.iteration_error),
         };
-        let image = self
-            .geometry
-            .frame(self.scene, self.engine.tracer(), &solution);
+        let image = self.geometry.frame(self.engine.tracer(), &solution);
         Frame {
             image,
             step,
