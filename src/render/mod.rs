@@ -8,5 +8,6 @@
 
 pub mod exr;
 pub mod image;
+pub mod tonemap;
 
 pub use image::{Image, Provenance, Quantity};
