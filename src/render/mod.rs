@@ -7,6 +7,7 @@
 //! (W/m², `-i` images), row-major from the top row, with a per-pixel stated error.
 
 pub mod exr;
+pub mod falsecolor;
 pub mod image;
 pub mod tonemap;
 
