@@ -6,7 +6,10 @@
 //! Every image here is an [`Image`]: linear RGB radiance (W·sr⁻¹·m⁻²) or irradiance
 //! (W/m², `-i` images), row-major from the top row, with a per-pixel stated error.
 
+pub mod exr;
+pub mod falsecolor;
 pub mod image;
+pub mod tonemap;
 
 pub use image::{Image, Provenance, Quantity};
 pub mod gather;
