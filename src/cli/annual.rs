@@ -12,26 +12,26 @@ use std::sync::Arc;
 
 /// A flag set by the first Ctrl-C; a second one kills the process (exit 130) while the
 /// batch in flight finishes.
-fn stop_on_ctrl_c() -> Arc<AtomicBool> {
+pub(super) fn stop_on_ctrl_c() -> Arc<AtomicBool> {
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
     let _ = ctrlc::set_handler(move || {
         if flag.swap(true, Ordering::SeqCst) {
             std::process::exit(130);
         }
-        note!("\nstopping after the current days (Ctrl-C again to abort)…");
+        note!("\nstopping after the work in flight (Ctrl-C again to abort)…");
     });
     stop
 }
 
 /// A progress bar when standard error is a terminal.
-fn progress_bar() -> Option<indicatif::ProgressBar> {
+pub(super) fn progress_bar(unit: &str) -> Option<indicatif::ProgressBar> {
     std::io::IsTerminal::is_terminal(&std::io::stderr()).then(|| {
         let b = indicatif::ProgressBar::new(0);
         b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{bar:40} {pos}/{len} steps {per_sec} ETA {eta}",
-            )
+            indicatif::ProgressStyle::with_template(&format!(
+                "{{bar:40}} {{pos}}/{{len}} {unit} {{per_sec}} ETA {{eta}}"
+            ))
             .expect("valid template"),
         );
         b
@@ -71,7 +71,7 @@ pub fn run(a: AnnualArgs) -> Result<()> {
     warnings(&weather.warnings);
     let store = config::store(&a.cache, a.no_cache);
     let stop = stop_on_ctrl_c();
-    let bar = progress_bar();
+    let bar = progress_bar("steps");
     let progress = |done: usize, total: usize| {
         if let Some(b) = &bar {
             b.set_length(total as u64);

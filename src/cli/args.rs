@@ -44,6 +44,10 @@ pub enum Command {
     /// A time series over a weather file (EPW or WEA): illuminance.csv, direct_sun.csv,
     /// metrics.csv, summary.json, report.json.
     Annual(AnnualArgs),
+    /// Images from the solution (final gather): per frame a linear HDR OpenEXR, a
+    /// tone-mapped PNG and optionally a falsecolor map; for a weather file's days, a
+    /// sequence with frames.csv and a playable preview. Resumable.
+    Render(RenderArgs),
     /// Assembles the output folders of `annual --shard k/n` runs into one run's files.
     Merge(MergeArgs),
     /// Inspect or maintain a projection cache folder.
@@ -98,6 +102,79 @@ pub struct SkyParams {
     /// Dew point for the Perez luminous efficacy, °C.
     #[arg(long)]
     pub dew_point: Option<f64>,
+}
+
+/// Arguments of `daystep render`.
+#[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub struct RenderArgs {
+    /// The scene file (scene.toml).
+    pub scene: PathBuf,
+    /// The camera as Radiance view options, quoted: "-vtv -vp 3 7 1.5 -vd 0 -1 0 -vh 60
+    /// -vv 45" (types -vtv, -vta, -vth, -vtl). Applied after --vf.
+    #[arg(long, allow_hyphen_values = true)]
+    pub view: Option<String>,
+    /// A view file as rvu saves it (.vf).
+    #[arg(long)]
+    pub vf: Option<PathBuf>,
+    /// Image width, pixels (Radiance's -x).
+    #[arg(short = 'x', default_value_t = 512)]
+    pub width: usize,
+    /// Image height, pixels (Radiance's -y).
+    #[arg(short = 'y', default_value_t = 512)]
+    pub height: usize,
+    /// Irradiance on the surfaces seen (lux in falsecolor), as rpict -i, instead of
+    /// radiance.
+    #[arg(short = 'i')]
+    pub irradiance: bool,
+    /// Primary rays per pixel (antialiasing; rounded up to a square).
+    #[arg(long, default_value_t = 4)]
+    pub samples: u32,
+    /// Gather rays per pixel (sky and interreflection).
+    #[arg(long, default_value_t = 64)]
+    pub gather: u32,
+    /// Local standard time of one frame, as for `instant` (with --sky).
+    #[arg(long, conflicts_with = "weather")]
+    pub time: Option<String>,
+    /// Sky model of the one frame.
+    #[arg(long, value_enum, requires = "time")]
+    pub sky: Option<SkyArg>,
+    /// The sky's parameters.
+    #[command(flatten)]
+    pub params: SkyParams,
+    /// Instead of --time/--sky: a weather file (EPW or WEA); one frame per lit record.
+    #[arg(long)]
+    pub weather: Option<PathBuf>,
+    /// First day of the sequence, YYYY-MM-DD.
+    #[arg(long, requires = "weather")]
+    pub start: Option<String>,
+    /// Last day of the sequence, YYYY-MM-DD.
+    #[arg(long, requires = "weather")]
+    pub end: Option<String>,
+    /// Timestep of the sequence, minutes (a divisor of the file's interval).
+    #[arg(long, requires = "weather")]
+    pub step: Option<u32>,
+    /// Output folder; a rerun with the same folder continues an interrupted sequence.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Exposure of the PNG: "auto" (log-average to 18 % grey) or a multiplier, as pfilt -e.
+    #[arg(long, default_value = "auto")]
+    pub exposure: String,
+    /// Also write a falsecolor map per frame (luminance cd/m², or illuminance lux with -i).
+    #[arg(long)]
+    pub falsecolor: bool,
+    /// Top of the falsecolor scale (falsecolor -s), cd/m² or lux.
+    #[arg(long, default_value_t = 1000.0)]
+    pub scale: f64,
+    /// Falsecolor bands (falsecolor -n).
+    #[arg(long, default_value_t = 8)]
+    pub steps: u32,
+    /// Logarithmic falsecolor scale over this many decades (falsecolor -log).
+    #[arg(long)]
+    pub log: Option<u32>,
+    /// Quality, cache and seed.
+    #[command(flatten)]
+    pub run: RunArgs,
 }
 
 /// Arguments of `daystep merge`.

@@ -5,7 +5,7 @@
 //!   metric thresholds, dates, shard, knobs), every refusal an [`crate::Error::Input`] naming the
 //!   flag and the value;
 //! - one short module per command ([`instant`], [`df`], [`convergence`], [`annual`],
-//!   [`merge`], [`cache`]) that calls the library and reports on the terminal; the work
+//!   [`render`], [`merge`], [`cache`]) that calls the library and reports on the terminal; the work
 //!   itself (choosing a weather record, checking sites, writing outputs) is in the
 //!   library, so a Rust caller gets it too;
 //! - `messages`: terminal output that never panics on a closed pipe;
@@ -23,6 +23,7 @@ pub mod convergence;
 pub mod df;
 pub mod instant;
 pub mod merge;
+pub mod render;
 pub(crate) mod messages;
 
 pub use args::{Cli, Command};
@@ -40,6 +41,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Df(a) => df::run(a),
         Command::Convergence(a) => convergence::run(a),
         Command::Annual(a) => annual::run(a),
+        Command::Render(a) => render::run(a),
         Command::Merge(a) => merge::run(a),
         Command::Cache { action } => cache::run(action),
     }

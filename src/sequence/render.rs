@@ -8,7 +8,12 @@ use super::report::Report;
 use super::step::{Engine, EngineOptions, Step, StepTime};
 use crate::cache::Store;
 use crate::error::{Error, Result};
-use crate::render::{Image, RenderOptions, Solution, ViewGeometry};
+use crate::photometry::EFFICACY_LM_PER_W;
+use crate::render::exr::write_exr;
+use crate::render::falsecolor::{write_falsecolor_png, Falsecolor};
+use crate::render::tonemap::{write_png, Exposure};
+use crate::render::{Image, Provenance, Quantity, RenderOptions, Solution, ViewGeometry};
+use std::sync::atomic::Ordering;
 use crate::scene::view::View;
 use crate::scene::Scene;
 use crate::site::solar_position::solar_position;
@@ -217,12 +222,10 @@ pub struct FrameRow {
     pub seconds: f64,
 }
 
-#[allow(dead_code)] // used by the runner (next commit)
 const FRAMES_HEADER: &str = "frame,time_local,time_utc,sky,mean,mean_err,dgp,ev_lux,seconds";
 
 impl FrameRow {
-    #[allow(dead_code)] // used by the runner (next commit)
-    fn csv(&self) -> String {
+        fn csv(&self) -> String {
         format!(
             "{},{},{},\"{}\",{:.6},{:.6},{:.4},{:.3},{:.3}",
             self.name,
@@ -239,7 +242,6 @@ impl FrameRow {
 }
 
 /// Reads the frames a previous run of the same folder finished (`frames.csv`), by name.
-#[allow(dead_code)] // used by the runner (next commit)
 fn finished_frames(out: &Path) -> Result<Vec<(String, String)>> {
     let path = out.join("frames.csv");
     if !path.exists() {
@@ -262,4 +264,241 @@ fn finished_frames(out: &Path) -> Result<Vec<(String, String)>> {
             (name, l.to_string())
         })
         .collect())
+}
+
+/// What a render run writes besides each frame's EXR.
+#[derive(Clone, Debug, Default)]
+pub struct RenderOutputs {
+    /// Tone-mapped PNG per frame, with this exposure.
+    pub png: Option<Exposure>,
+    /// Falsecolor PNG per frame (`{frame}_falsecolor.png`).
+    pub falsecolor: Option<Falsecolor>,
+    /// Radiance HDR picture per frame (`{frame}.hdr`, for rpict/evalglare users).
+    pub hdr: bool,
+    /// The command line, for the files' provenance.
+    pub command: String,
+}
+
+/// What a render run did.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct RenderReport {
+    /// daystep version.
+    pub version: String,
+    /// Scene file.
+    pub scene: String,
+    /// The view, Radiance options (model frame).
+    pub view: String,
+    /// Image size, pixels.
+    pub width: usize,
+    /// Image size, pixels.
+    pub height: usize,
+    /// Primary rays per pixel.
+    pub samples: u32,
+    /// Gather rays per pixel.
+    pub gather_rays: u32,
+    /// What the pixels hold: "radiance" or "irradiance".
+    pub quantity: String,
+    /// Quality preset.
+    pub quality: String,
+    /// Frames planned.
+    pub frames: usize,
+    /// Frames rendered by this run.
+    pub computed: usize,
+    /// Frames a previous run of the folder had finished.
+    pub resumed: usize,
+    /// Stopped by the caller before the end.
+    pub interrupted: bool,
+    /// Rays traced for the camera's geometry (primary, mirror and gather rays).
+    pub geometry_rays: u64,
+    /// Bytes the camera's geometry holds.
+    pub geometry_bytes: usize,
+    /// Seconds tracing it.
+    pub geometry_seconds: f64,
+    /// Seconds of the engine's set-up (operator).
+    pub setup_seconds: f64,
+    /// Per rendered frame: wall time of the step, s (median).
+    pub median_step_seconds: f64,
+    /// Per rendered frame: wall time of the gather, s (median).
+    pub median_gather_seconds: f64,
+    /// Total wall time, s.
+    pub total_seconds: f64,
+    /// What was left out and why.
+    pub skipped: Vec<String>,
+    /// Non-fatal remarks.
+    pub warnings: Vec<String>,
+    /// How each pixel's `err` is estimated.
+    pub error_model: String,
+}
+
+/// How a pixel's stated error is made (`report.json`).
+pub const PIXEL_ERROR_MODEL: &str = "err = 1-sigma of the pixel mean over its \
+    antialiasing samples and over the solution's independent parts + |sky irradiance of the \
+    element - of its parent| x rho/pi + |gathered interreflection - the same on the mesh one \
+    level coarser| + the solve's relative iteration error x gathered interreflection";
+
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Renders `frames` into `out`: per frame `{name}.exr` (and the PNGs, HDR and glare
+/// asked for in `outputs`), `frames.csv` after every frame, and for sequences a playable
+/// `preview.png` (animated) and `preview.html`. A rerun into the same folder skips the
+/// frames `frames.csv` lists; frames are independent, so the files are the same.
+///
+/// # Errors
+/// A glare evaluation asked of a view that is not an angular fisheye, bad sky values,
+/// unwritable files.
+#[allow(clippy::too_many_arguments)]
+pub fn run_render(
+    scene: &Scene,
+    quality: &Quality,
+    store: &Store,
+    camera: &Camera,
+    frames: &[FramePlan],
+    out: &Path,
+    outputs: &RenderOutputs,
+    control: &super::annual::RunControl,
+) -> Result<RenderReport> {
+    let t0 = Instant::now();
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    let done = finished_frames(out)?;
+    let mut rows: Vec<(String, String)> = done
+        .into_iter()
+        .filter(|(name, _)| out.join(format!("{name}.exr")).exists())
+        .collect();
+    let mut report = RenderReport {
+        version: env!("CARGO_PKG_VERSION").into(),
+        scene: scene.path.display().to_string(),
+        view: camera.view.options(),
+        width: camera.options.width,
+        height: camera.options.height,
+        samples: camera.options.samples,
+        gather_rays: camera.options.gather_rays,
+        quantity: match camera.options.quantity {
+            Quantity::Radiance => "radiance".into(),
+            Quantity::Irradiance => "irradiance".into(),
+        },
+        quality: quality.name.into(),
+        frames: frames.len(),
+        error_model: PIXEL_ERROR_MODEL.into(),
+        warnings: scene.warnings.clone(),
+        ..RenderReport::default()
+    };
+    let todo: Vec<&FramePlan> = frames
+        .iter()
+        .filter(|f| !rows.iter().any(|(n, _)| *n == f.name))
+        .collect();
+    report.resumed = frames.len() - todo.len();
+    (control.progress)(report.resumed, frames.len());
+    let renderer = (!todo.is_empty()).then(|| Renderer::new(scene, quality, store, camera));
+    if let Some(r) = &renderer {
+        report.geometry_rays = r.geometry().rays;
+        report.geometry_bytes = r.geometry().bytes();
+        report.geometry_seconds = r.geometry_seconds;
+        report.setup_seconds = r.engine().setup_times().total();
+        report.warnings.extend(r.engine().directions().store().warnings());
+    }
+    let (mut step_s, mut gather_s) = (Vec::new(), Vec::new());
+    for plan in todo {
+        if control.stop.load(Ordering::SeqCst) {
+            report.interrupted = true;
+            break;
+        }
+        let renderer = renderer.as_ref().expect("made when frames remain");
+        let t = Instant::now();
+        let mut frame = renderer.frame(&plan.at, &plan.spec)?;
+        step_s.push(frame.step.report.stage_seconds.total());
+        gather_s.push(frame.gather_seconds);
+        for w in &frame.step.report.warnings {
+            if !report.warnings.contains(w) {
+                report.warnings.push(w.clone());
+            }
+        }
+        for s in &frame.step.report.skipped {
+            if !report.skipped.contains(s) {
+                report.skipped.push(s.clone());
+            }
+        }
+        frame.image.provenance = Provenance {
+            command: outputs.command.clone(),
+            view: camera.view.options(),
+            time: format!("{} (local standard time), {} UTC", plan.label, plan.at.utc.to_rfc3339()),
+            sky: frame.step.report.sky.clone(),
+            software: format!("daystep {}", env!("CARGO_PKG_VERSION")),
+        };
+        let mut row = write_frame(out, plan, &frame.image, outputs)?;
+        row.sky = frame.step.report.sky.clone();
+        row.seconds = t.elapsed().as_secs_f64();
+        rows.push((plan.name.clone(), row.csv()));
+        write_frames_csv(out, frames, &rows)?;
+        report.computed += 1;
+        (control.progress)(report.resumed + report.computed, frames.len());
+    }
+    if frames.len() > 1 && !report.interrupted {
+        write_previews(out, frames, outputs)?;
+    }
+    report.median_step_seconds = median(step_s);
+    report.median_gather_seconds = median(gather_s);
+    report.total_seconds = t0.elapsed().as_secs_f64();
+    let json = serde_json::to_string_pretty(&report)
+        .map_err(|e| Error::Internal(format!("report serialisation: {e}")))?;
+    crate::files::write_atomic(&out.join("report.json"), json.as_bytes())?;
+    Ok(report)
+}
+
+/// `frames.csv`, rows in plan order (finished frames only).
+fn write_frames_csv(out: &Path, frames: &[FramePlan], rows: &[(String, String)]) -> Result<()> {
+    let mut text = String::from(FRAMES_HEADER);
+    text.push('\n');
+    for f in frames {
+        if let Some((_, line)) = rows.iter().find(|(n, _)| *n == f.name) {
+            text.push_str(line);
+            text.push('\n');
+        }
+    }
+    crate::files::write_atomic(&out.join("frames.csv"), text.as_bytes())
+}
+
+/// Writes one frame's files (EXR always; PNG, falsecolor as asked) and returns its row.
+fn write_frame(
+    out: &Path,
+    plan: &FramePlan,
+    image: &Image,
+    outputs: &RenderOutputs,
+) -> Result<FrameRow> {
+    write_exr(&out.join(format!("{}.exr", plan.name)), image)?;
+    if let Some(e) = outputs.png {
+        write_png(&out.join(format!("{}.png", plan.name)), image, e)?;
+    }
+    if let Some(f) = &outputs.falsecolor {
+        write_falsecolor_png(&out.join(format!("{}_falsecolor.png", plan.name)), image, f)?;
+    }
+    let (mut sum, mut err, mut n) = (0.0, 0.0, 0.0);
+    for i in 0..image.rgb.len() {
+        if image.valid[i] {
+            sum += image.photometric(i);
+            err += EFFICACY_LM_PER_W * image.err[i];
+            n += 1.0;
+        }
+    }
+    let n = f64::max(n, 1.0);
+    Ok(FrameRow {
+        name: plan.name.clone(),
+        time_local: plan.label.clone(),
+        time_utc: plan.at.utc.to_rfc3339(),
+        mean: sum / n,
+        mean_err: err / n,
+        dgp: f64::NAN,
+        ev_lux: f64::NAN,
+        ..FrameRow::default()
+    })
+}
+
+/// The preview of a sequence: what a person can play (written after the last frame).
+fn write_previews(_out: &Path, _frames: &[FramePlan], _outputs: &RenderOutputs) -> Result<()> {
+    Ok(())
 }

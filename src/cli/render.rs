@@ -1,0 +1,181 @@
+//! `daystep render`: images from the solution, one instant or a weather file's sequence.
+
+use super::args::RenderArgs;
+use super::config;
+use super::messages::{note, warnings};
+use crate::error::{Error, Result};
+use crate::render::falsecolor::Falsecolor;
+use crate::render::tonemap::Exposure;
+use crate::render::{Quantity, RenderOptions};
+use crate::scene::view::View;
+use crate::scene::Scene;
+use crate::sequence::annual::RunControl;
+use crate::sequence::render::{plan_weather, run_render, Camera, FramePlan, RenderOutputs};
+use crate::sequence::StepTime;
+use std::path::Path;
+
+/// The camera of the arguments: `--vf`, then `--view` over it.
+fn view(a: &RenderArgs) -> Result<View> {
+    let mut v = View::default();
+    if let Some(f) = &a.vf {
+        v = View::read_file(f)?;
+    }
+    if let Some(text) = &a.view {
+        v = v.with_options(text, Path::new("<argument --view>"), None)?;
+    }
+    if a.vf.is_none() && a.view.is_none() {
+        return Err(Error::arg(
+            "--view",
+            "",
+            "give the camera with --view \"-vtv -vp … -vd …\" or --vf FILE.vf",
+        ));
+    }
+    Ok(v)
+}
+
+fn exposure(v: &str) -> Result<Exposure> {
+    if v == "auto" {
+        return Ok(Exposure::Auto);
+    }
+    match v.parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(Exposure::Given(x)),
+        _ => Err(Error::arg(
+            "--exposure",
+            v,
+            "expected \"auto\" or a positive multiplier",
+        )),
+    }
+}
+
+/// Runs `daystep render` into `--out`; a rerun with the same folder continues.
+///
+/// # Errors
+/// Bad arguments, view, scene or weather ([`Error::Input`]), unwritable output;
+/// [`Error::Interrupted`] after Ctrl-C, once the finished frames are written.
+pub fn run(a: RenderArgs) -> Result<()> {
+    let q = config::quality(&a.run.quality, a.run.seed)?;
+    for (flag, v) in [("-x", a.width), ("-y", a.height)] {
+        if v == 0 || v > 16384 {
+            return Err(Error::arg(flag, v, "image size must be 1..16384 pixels"));
+        }
+    }
+    let camera = Camera {
+        view: view(&a)?,
+        options: RenderOptions {
+            width: a.width,
+            height: a.height,
+            samples: a.samples.max(1),
+            gather_rays: a.gather,
+            quantity: if a.irradiance {
+                Quantity::Irradiance
+            } else {
+                Quantity::Radiance
+            },
+            seed: q.transport.seed,
+            ..RenderOptions::default()
+        },
+    };
+    let scene = Scene::load(&a.scene)?;
+    warnings(&scene.warnings);
+    let mut skipped = Vec::new();
+    let frames: Vec<FramePlan> = match (&a.weather, &a.time) {
+        (Some(path), _) => {
+            let mut weather = crate::weather::read_weather(path)?;
+            if let Some(step) = a.step {
+                weather = crate::weather::resample(&weather, step)?;
+            }
+            warnings(&weather.warnings);
+            let day = |flag: &str, v: &Option<String>| -> Result<_> {
+                v.as_deref()
+                    .map(|v| config::date(flag, v).map(|d| weather.same_day_in_file_year(d)))
+                    .transpose()
+            };
+            let (frames, night, missing) = plan_weather(
+                &scene,
+                &weather,
+                day("--start", &a.start)?,
+                day("--end", &a.end)?,
+            );
+            if night > 0 {
+                skipped.push(format!("{night} night steps"));
+            }
+            if missing > 0 {
+                skipped.push(format!("{missing} records with missing irradiance"));
+            }
+            frames
+        }
+        (None, Some(t)) => {
+            let sky = a
+                .sky
+                .ok_or_else(|| Error::arg("--sky", "", "--time needs --sky"))?;
+            let spec = config::sky_spec(sky, &a.params)?;
+            let (utc, local) = crate::site::parse_time(t, scene.site.utc_offset_h)?;
+            vec![FramePlan::new(StepTime { utc, local }, spec)]
+        }
+        (None, None) => {
+            return Err(Error::arg(
+                "--time",
+                "",
+                "give --time T --sky … for one frame, or --weather FILE for a sequence",
+            ))
+        }
+    };
+    let outputs = RenderOutputs {
+        png: Some(exposure(&a.exposure)?),
+        falsecolor: a.falsecolor.then(|| Falsecolor {
+            scale_max: a.scale,
+            steps: a.steps,
+            log_decades: a.log,
+            ..Falsecolor::default()
+        }),
+        hdr: false,
+        command: std::env::args().collect::<Vec<_>>().join(" "),
+    };
+    let store = config::store(&a.run.cache, a.run.no_cache);
+    let stop = super::annual::stop_on_ctrl_c();
+    let bar = super::annual::progress_bar("frames");
+    let progress = |done: usize, total: usize| {
+        if let Some(b) = &bar {
+            b.set_length(total as u64);
+            b.set_position(done as u64);
+        }
+    };
+    let control = RunControl {
+        stop: &stop,
+        progress: &progress,
+    };
+    let r = run_render(&scene, &q, &store, &camera, &frames, &a.out, &outputs, &control)?;
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    warnings(&r.warnings);
+    if r.interrupted {
+        note!(
+            "daystep render: interrupted after {} of {} frames; finished frames are kept in {}. To continue, run the same command again.",
+            r.resumed + r.computed,
+            r.frames,
+            a.out.display()
+        );
+        return Err(Error::Interrupted);
+    }
+    let skipped = if skipped.is_empty() {
+        String::new()
+    } else {
+        format!(" ({} skipped)", skipped.join(", "))
+    };
+    note!(
+        "daystep render: {} frames{} ({} rendered, {} resumed), {}×{}, {:.1} s; camera {:.1} s, median step {:.2} s, gather {:.2} s; wrote {}",
+        r.frames,
+        skipped,
+        r.computed,
+        r.resumed,
+        r.width,
+        r.height,
+        r.total_seconds,
+        r.geometry_seconds,
+        r.median_step_seconds,
+        r.median_gather_seconds,
+        a.out.display()
+    );
+    Ok(())
+}
