@@ -9,6 +9,7 @@
 pub mod exr;
 pub mod falsecolor;
 pub mod image;
+pub mod preview;
 pub mod tonemap;
 
 pub use image::{Image, Provenance, Quantity};
