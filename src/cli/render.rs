@@ -144,7 +144,9 @@ pub fn run(a: RenderArgs) -> Result<()> {
         stop: &stop,
         progress: &progress,
     };
-    let r = run_render(&scene, &q, &store, &camera, &frames, &a.out, &outputs, &control)?;
+    let r = run_render(
+        &scene, &q, &store, &camera, &frames, &a.out, &outputs, &control,
+    )?;
     if let Some(b) = bar {
         b.finish_and_clear();
     }

@@ -20,6 +20,8 @@ use std::collections::HashMap;
 use std::io::Cursor;
 use std::path::Path;
 
+/// The header attribute holding the provenance, a string vector of `key=value` entries.
+const PROVENANCE: &str = "daystep";
 const COMMAND: &str = "daystep.command";
 const VIEW: &str = "daystep.view";
 const TIME: &str = "daystep.time";
@@ -80,6 +82,10 @@ pub fn encode_exr(image: &Image) -> Result<Vec<u8>> {
     ]);
     let p = &image.provenance;
     let mut attributes = LayerAttributes::default();
+    // One string-vector attribute of `key=value` entries, in this order: the exr crate
+    // keeps custom attributes in a HashMap, whose order (and so the file's bytes) would
+    // change from run to run with one attribute per key.
+    let mut entries = Vec::new();
     for (key, value) in [
         (COMMAND, p.command.as_str()),
         (VIEW, p.view.as_str()),
@@ -89,10 +95,11 @@ pub fn encode_exr(image: &Image) -> Result<Vec<u8>> {
         (QUANTITY, quantity_name(image.quantity)),
         (UNIT, channel_unit(image.quantity)),
     ] {
-        attributes
-            .other
-            .insert(text(key), AttributeValue::Text(text(value)));
+        entries.push(text(&format!("{key}={value}")));
     }
+    attributes
+        .other
+        .insert(text(PROVENANCE), AttributeValue::TextVector(entries));
     let layer = Layer::new(
         (image.width, image.height),
         attributes,
@@ -188,12 +195,20 @@ fn header_texts(image: &ImageAttributes, layer: &LayerAttributes) -> HashMap<Str
         .other
         .iter()
         .chain(layer.other.iter())
-        .filter_map(|(k, v)| match v {
-            AttributeValue::Text(t) => Some((
+        .flat_map(|(k, v)| match v {
+            AttributeValue::Text(t) => vec![(
                 String::from_utf8_lossy(k.bytes()).into_owned(),
                 String::from_utf8_lossy(t.bytes()).into_owned(),
-            )),
-            _ => None,
+            )],
+            AttributeValue::TextVector(list) if k.eq(PROVENANCE) => list
+                .iter()
+                .filter_map(|t| {
+                    let e = String::from_utf8_lossy(t.bytes()).into_owned();
+                    e.split_once('=')
+                        .map(|(a, b)| (a.to_string(), b.to_string()))
+                })
+                .collect(),
+            _ => Vec::new(),
         })
         .collect()
 }
@@ -258,8 +273,12 @@ mod tests {
                 .or_else(|| h.shared_attributes.other.get(&text(k)))
                 .cloned()
         };
-        assert_eq!(get(QUANTITY), Some(AttributeValue::Text(text("radiance"))));
-        assert_eq!(get(UNIT), Some(AttributeValue::Text(text("W/(sr m2)"))));
+        let Some(AttributeValue::TextVector(list)) = get(PROVENANCE) else {
+            panic!("no {PROVENANCE} attribute");
+        };
+        let list: Vec<String> = list.iter().map(|t| t.to_string()).collect();
+        assert!(list.contains(&format!("{QUANTITY}=radiance")), "{list:?}");
+        assert!(list.contains(&format!("{UNIT}=W/(sr m2)")), "{list:?}");
         assert_eq!(read_exr(&path).unwrap().quantity, Quantity::Radiance);
     }
 

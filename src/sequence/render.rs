@@ -13,7 +13,6 @@ use crate::render::exr::write_exr;
 use crate::render::falsecolor::{write_falsecolor_png, Falsecolor};
 use crate::render::tonemap::{write_png, Exposure};
 use crate::render::{Image, Provenance, Quantity, RenderOptions, Solution, ViewGeometry};
-use std::sync::atomic::Ordering;
 use crate::scene::view::View;
 use crate::scene::Scene;
 use crate::site::solar_position::solar_position;
@@ -22,6 +21,7 @@ use crate::weather::Weather;
 use chrono::NaiveDate;
 use serde::Serialize;
 use std::path::Path;
+use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 /// A camera and how finely to render it. The view is in the model's frame, as the user
@@ -225,7 +225,7 @@ pub struct FrameRow {
 const FRAMES_HEADER: &str = "frame,time_local,time_utc,sky,mean,mean_err,dgp,ev_lux,seconds";
 
 impl FrameRow {
-        fn csv(&self) -> String {
+    fn csv(&self) -> String {
         format!(
             "{},{},{},\"{}\",{:.6},{:.6},{:.4},{:.3},{:.3}",
             self.name,
@@ -400,7 +400,9 @@ pub fn run_render(
         report.geometry_bytes = r.geometry().bytes();
         report.geometry_seconds = r.geometry_seconds;
         report.setup_seconds = r.engine().setup_times().total();
-        report.warnings.extend(r.engine().directions().store().warnings());
+        report
+            .warnings
+            .extend(r.engine().directions().store().warnings());
     }
     let (mut step_s, mut gather_s) = (Vec::new(), Vec::new());
     for plan in todo {
@@ -426,7 +428,11 @@ pub fn run_render(
         frame.image.provenance = Provenance {
             command: outputs.command.clone(),
             view: camera.view.options(),
-            time: format!("{} (local standard time), {} UTC", plan.label, plan.at.utc.to_rfc3339()),
+            time: format!(
+                "{} (local standard time), {} UTC",
+                plan.label,
+                plan.at.utc.to_rfc3339()
+            ),
             sky: frame.step.report.sky.clone(),
             software: format!("daystep {}", env!("CARGO_PKG_VERSION")),
         };
@@ -498,7 +504,57 @@ fn write_frame(
     })
 }
 
-/// The preview of a sequence: what a person can play (written after the last frame).
-fn write_previews(_out: &Path, _frames: &[FramePlan], _outputs: &RenderOutputs) -> Result<()> {
-    Ok(())
+/// The preview of a sequence, what a person can play: `preview.png` (animated PNG) and
+/// `preview.html` (time slider), from each frame's falsecolor map when asked, else its
+/// tone-mapped PNG, read back from the folder (so resumed frames take part).
+fn write_previews(out: &Path, frames: &[FramePlan], outputs: &RenderOutputs) -> Result<()> {
+    let suffix = match (&outputs.falsecolor, outputs.png) {
+        (Some(_), _) => "_falsecolor.png",
+        (None, Some(_)) => ".png",
+        (None, None) => return Ok(()),
+    };
+    let (mut pages, mut rgba, mut size) = (Vec::new(), Vec::new(), None);
+    for f in frames {
+        let path = out.join(format!("{}{suffix}", f.name));
+        let bytes = std::fs::read(&path).map_err(|e| Error::io(&path, e))?;
+        let (w, h, px) = decode_rgba(&path, &bytes)?;
+        if *size.get_or_insert((w, h)) != (w, h) {
+            return Err(Error::input(&path, None, None, "frames differ in size"));
+        }
+        rgba.push(px);
+        pages.push((f.label.clone(), bytes));
+    }
+    let (w, h) = size.unwrap_or((0, 0));
+    crate::render::preview::write_apng(
+        &out.join("preview.png"),
+        w,
+        h,
+        &rgba,
+        std::time::Duration::from_millis(500),
+    )?;
+    crate::render::preview::write_html(&out.join("preview.html"), &pages, "daystep render")
+}
+
+/// The 8-bit RGBA pixels of a PNG daystep wrote.
+fn decode_rgba(path: &Path, bytes: &[u8]) -> Result<(usize, usize, Vec<u8>)> {
+    let bad =
+        |e: String| Error::input(path, None, None, format!("cannot read the frame back: {e}"));
+    let mut reader = png::Decoder::new(std::io::Cursor::new(bytes))
+        .read_info()
+        .map_err(|e| bad(e.to_string()))?;
+    let mut buf = vec![0; reader.output_buffer_size().unwrap_or(0)];
+    let info = reader
+        .next_frame(&mut buf)
+        .map_err(|e| bad(e.to_string()))?;
+    buf.truncate(info.buffer_size());
+    let (w, h) = (info.width as usize, info.height as usize);
+    let px = match info.color_type {
+        png::ColorType::Rgba => buf,
+        png::ColorType::Rgb => buf
+            .chunks(3)
+            .flat_map(|c| [c[0], c[1], c[2], 255])
+            .collect(),
+        t => return Err(bad(format!("colour type {t:?}"))),
+    };
+    Ok((w, h, px))
 }
