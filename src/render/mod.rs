@@ -6,6 +6,8 @@
 //! Every image here is an [`Image`]: linear RGB radiance (W·sr⁻¹·m⁻²) or irradiance
 //! (W/m², `-i` images), row-major from the top row, with a per-pixel stated error.
 
+pub mod glare;
 pub mod image;
+pub mod rgbe;
 
 pub use image::{Image, Provenance, Quantity};
