@@ -172,6 +172,17 @@ pub struct RenderArgs {
     /// Logarithmic falsecolor scale over this many decades (falsecolor -log).
     #[arg(long)]
     pub log: Option<u32>,
+    /// Also write a Radiance HDR picture per frame ({frame}.hdr).
+    #[arg(long)]
+    pub hdr: bool,
+    /// Daylight glare probability and vertical eye illuminance per frame (frames.csv
+    /// columns dgp, ev_lux): angular fisheye views (-vta) only.
+    #[arg(long)]
+    pub glare: bool,
+    /// Glare-source threshold as evalglare -b: a factor of the mean luminance (default
+    /// 5), or above 100 a luminance in cd/m².
+    #[arg(long, requires = "glare")]
+    pub glare_threshold: Option<f64>,
     /// Quality, cache and seed.
     #[command(flatten)]
     pub run: RunArgs,

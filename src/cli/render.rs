@@ -5,6 +5,7 @@ use super::config;
 use super::messages::{note, warnings};
 use crate::error::{Error, Result};
 use crate::render::falsecolor::Falsecolor;
+use crate::render::glare::{GlareOptions, Threshold};
 use crate::render::tonemap::Exposure;
 use crate::render::{Quantity, RenderOptions};
 use crate::scene::view::View;
@@ -128,7 +129,15 @@ pub fn run(a: RenderArgs) -> Result<()> {
             log_decades: a.log,
             ..Falsecolor::default()
         }),
-        hdr: false,
+        hdr: a.hdr,
+        glare: a.glare.then(|| GlareOptions {
+            threshold: match a.glare_threshold {
+                Some(t) if t > 100.0 => Threshold::Absolute(t),
+                Some(t) => Threshold::TaskFactor(t),
+                None => Threshold::TaskFactor(5.0),
+            },
+            ..GlareOptions::default()
+        }),
         command: std::env::args().collect::<Vec<_>>().join(" "),
     };
     let store = config::store(&a.run.cache, a.run.no_cache);

@@ -6,13 +6,14 @@
 //! Every image here is an [`Image`]: linear RGB radiance (W·sr⁻¹·m⁻²) or irradiance
 //! (W/m², `-i` images), row-major from the top row, with a per-pixel stated error.
 
-pub mod exr;
-pub mod falsecolor;
-pub mod image;
-pub mod preview;
-pub mod tonemap;
-
-pub use image::{Image, Provenance, Quantity};
-pub mod gather;
+pub mod image; // the shared image type
+pub mod gather; // the final gather: a step's solution seen through a camera
+pub mod exr; // linear HDR OpenEXR with the error channel and provenance
+pub mod rgbe; // Radiance HDR pictures (RGBE), read and written
+pub mod tonemap; // tone-mapped 8-bit sRGB PNG
+pub mod falsecolor; // falsecolor maps with a legend, as Radiance's falsecolor
+pub mod preview; // playable previews of sequences: animated PNG, HTML slider
+pub mod glare; // daylight glare probability from angular fisheye images
 
 pub use gather::{RenderOptions, Solution, ViewGeometry};
+pub use image::{Image, Provenance, Quantity};

@@ -11,9 +11,12 @@ use crate::error::{Error, Result};
 use crate::photometry::EFFICACY_LM_PER_W;
 use crate::render::exr::write_exr;
 use crate::render::falsecolor::{write_falsecolor_png, Falsecolor};
+use crate::render::glare::{glare, GlareOptions};
+use crate::render::rgbe::write_hdr;
 use crate::render::tonemap::{write_png, Exposure};
 use crate::render::{Image, Provenance, Quantity, RenderOptions, Solution, ViewGeometry};
 use crate::scene::view::View;
+use crate::scene::view::ViewType;
 use crate::scene::Scene;
 use crate::site::solar_position::solar_position;
 use crate::sky::Sky;
@@ -275,6 +278,8 @@ pub struct RenderOutputs {
     pub falsecolor: Option<Falsecolor>,
     /// Radiance HDR picture per frame (`{frame}.hdr`, for rpict/evalglare users).
     pub hdr: bool,
+    /// Glare (DGP, vertical eye illuminance) per frame: angular fisheye views only.
+    pub glare: Option<GlareOptions>,
     /// The command line, for the files' provenance.
     pub command: String,
 }
@@ -364,6 +369,13 @@ pub fn run_render(
     control: &super::annual::RunControl,
 ) -> Result<RenderReport> {
     let t0 = Instant::now();
+    if outputs.glare.is_some() && camera.view.kind != ViewType::Angular {
+        return Err(Error::arg(
+            "--glare",
+            camera.view.options(),
+            "glare needs an angular fisheye view (-vta, e.g. -vh 180 -vv 180)",
+        ));
+    }
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let done = finished_frames(out)?;
     let mut rows: Vec<(String, String)> = done
@@ -437,6 +449,18 @@ pub fn run_render(
             software: format!("daystep {}", env!("CARGO_PKG_VERSION")),
         };
         let mut row = write_frame(out, plan, &frame.image, outputs)?;
+        if outputs.hdr {
+            write_hdr(
+                &out.join(format!("{}.hdr", plan.name)),
+                &frame.image,
+                Some(&camera.view),
+            )?;
+        }
+        if let Some(g) = &outputs.glare {
+            let r = glare(&frame.image, &camera.scene_view(scene), g)?;
+            row.dgp = r.dgp;
+            row.ev_lux = r.ev_lux;
+        }
         row.sky = frame.step.report.sky.clone();
         row.seconds = t.elapsed().as_secs_f64();
         rows.push((plan.name.clone(), row.csv()));
