@@ -458,15 +458,13 @@ fn components(
     }
     let mut index = std::collections::HashMap::new();
     let mut groups: Vec<Vec<usize>> = Vec::new();
-    for (i, &m) in mask.iter().enumerate().take(n) {
-        if m {
-            let root = find(&mut parent, i);
-            let g = *index.entry(root).or_insert_with(|| {
-                groups.push(Vec::new());
-                groups.len() - 1
-            });
-            groups[g].push(i);
-        }
+    for i in (0..n).filter(|&i| mask[i]) {
+        let root = find(&mut parent, i);
+        let g = *index.entry(root).or_insert_with(|| {
+            groups.push(Vec::new());
+            groups.len() - 1
+        });
+        groups[g].push(i);
     }
     groups
 }

@@ -30,7 +30,7 @@ const RLE_WIDTHS: std::ops::RangeInclusive<usize> = 8..=0x7fff;
 /// mantissas truncated, so decoding adds half a step back.
 pub fn to_rgbe(c: Rgb) -> [u8; 4] {
     let d = c.x.max(c.y).max(c.z);
-    if d.is_nan() || d <= 1e-32 || !d.is_finite() {
+    if !d.is_finite() || d <= 1e-32 {
         return [0; 4];
     }
     let (m, e) = frexp(d);
@@ -506,9 +506,9 @@ mod tests {
         let (im, view) = decode_hdr(&b, Path::new("hand.hdr")).unwrap();
         assert_eq!(view, None);
         let blue = [7, 7, 7, 7, 7, 7, 1, 2, 3, 4];
-        for (k, &bk) in blue.iter().enumerate() {
+        for (k, b) in blue.iter().enumerate() {
             // Stored = true × 0.5, so true = stored / 0.5.
-            let want = DVec3::new(64.5, (10 * k) as f64 + 0.5, bk as f64 + 0.5) / 128.0 / 0.5;
+            let want = DVec3::new(64.5, (10 * k) as f64 + 0.5, *b as f64 + 0.5) / 128.0 / 0.5;
             assert!((im.rgb[k] - want).abs().max_element() < 1e-12, "{k}");
         }
     }
