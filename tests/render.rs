@@ -340,3 +340,54 @@ fn a_sequence_interrupted_and_resumed_gives_identical_files() {
     };
     assert_eq!(strip(once.path()), strip(twice.path()));
 }
+
+/// The camera's geometry is cached like projections: a second run reads it and renders
+/// the same bits; a damaged record is rebuilt, never trusted.
+#[test]
+fn the_camera_geometry_is_cached_and_a_damaged_record_is_rebuilt() {
+    use daystep::sequence::{SkySpec, StepTime};
+    let scene = Scene::load(&office()).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let camera = Camera {
+        view: view("-vta -vp 3 4 1.2 -vd 0 -1 0 -vu 0 0 1 -vh 180 -vv 180"),
+        options: RenderOptions {
+            width: 24,
+            height: 24,
+            samples: 1,
+            gather_rays: 9,
+            ..RenderOptions::default()
+        },
+    };
+    let (utc, local) =
+        daystep::site::parse_time("2021-03-21T12:00", scene.site.utc_offset_h).unwrap();
+    let spec = SkySpec::Perez {
+        dni: 700.0,
+        dhi: 120.0,
+        dew_point_c: None,
+    };
+    let q = Quality::preset("draft").unwrap();
+    let render = || {
+        let store = Store::open(dir.path(), 1 << 30);
+        let r = Renderer::new(&scene, &q, &store, &camera);
+        let img = r.frame(&StepTime { utc, local }, &spec).unwrap().image;
+        (r.geometry_from_cache, img)
+    };
+    let (cached, first) = render();
+    assert!(!cached);
+    let (cached, second) = render();
+    assert!(cached, "the second run reads the camera's geometry");
+    assert_eq!(first.rgb, second.rgb);
+    assert_eq!(first.err, second.err);
+    // Truncate every record that holds a camera (the largest file is enough to find it:
+    // damage them all, projections are rebuilt too).
+    for e in std::fs::read_dir(dir.path()).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_some_and(|x| x == "dsr") {
+            let b = std::fs::read(&p).unwrap();
+            std::fs::write(&p, &b[..b.len() / 2]).unwrap();
+        }
+    }
+    let (cached, third) = render();
+    assert!(!cached, "a truncated record is not trusted");
+    assert_eq!(first.rgb, third.rgb);
+}

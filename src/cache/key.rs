@@ -125,6 +125,9 @@ pub const KIND_SUN_GRID: u8 = 4;
 /// coefficients; the direction id and kind of the direction's own record, hashed in
 /// `scene`).
 pub const KIND_COEFFICIENTS: u8 = 5;
+/// Record kind: a camera's traced geometry for renders (primary hits and gather rows;
+/// `scene` hashes the operator's key, the view and the render options).
+pub const KIND_VIEW: u8 = 6;
 // Kinds 3..=255 are free for later record types (global-line bundles, depth maps, …).
 
 /// Lossless 64-bit id of a sun-grid cell: spacing δ (µdeg) in the top 32 bits, the altitude

@@ -117,6 +117,70 @@ struct Sample {
     kind: Kind,
 }
 
+/// A [`Sample`] as stored in a cache record (plain old data, no padding).
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+struct FlatSample {
+    /// Surface point, or sky direction.
+    point: [f64; 3],
+    tau: [f32; 3],
+    /// 0 black, 1 sky, 2 surface.
+    kind: u32,
+    aa: u32,
+    tri: u32,
+    start: u32,
+    len: u32,
+}
+
+impl FlatSample {
+    fn of(s: &Sample) -> FlatSample {
+        let mut f = FlatSample {
+            aa: s.aa,
+            ..FlatSample::default()
+        };
+        match s.kind {
+            Kind::Black => {}
+            Kind::Sky { dir, tau } => {
+                f.kind = 1;
+                f.point = dir.to_array();
+                f.tau = tau;
+            }
+            Kind::Surface(x) => {
+                f.kind = 2;
+                f.point = x.point.to_array();
+                f.tau = x.tau;
+                (f.tri, f.start, f.len) = (x.tri, x.start, x.len);
+            }
+        }
+        f
+    }
+
+    fn sample(&self) -> Option<Sample> {
+        let kind = match self.kind {
+            0 => Kind::Black,
+            1 => Kind::Sky {
+                dir: DVec3::from_array(self.point),
+                tau: self.tau,
+            },
+            2 => Kind::Surface(Surface {
+                tri: self.tri,
+                point: DVec3::from_array(self.point),
+                tau: self.tau,
+                start: self.start,
+                len: self.len,
+            }),
+            _ => return None,
+        };
+        Some(Sample { aa: self.aa, kind })
+    }
+}
+
+const TAG_OFFSETS: u32 = crate::cache::FIRST_USER_TAG;
+const TAG_AA: u32 = TAG_OFFSETS + 1;
+const TAG_SAMPLES: u32 = TAG_OFFSETS + 2;
+const TAG_ENTRIES: u32 = TAG_OFFSETS + 3;
+const TAG_RAYS: u32 = TAG_OFFSETS + 4;
+
 /// Everything about a camera that does not change from step to step: each pixel's
 /// samples, where they end, and their gather rays' mesh rows and weights.
 pub struct ViewGeometry {
@@ -181,6 +245,80 @@ impl ViewGeometry {
             g.rays += rays;
         }
         g
+    }
+
+    /// The geometry as a cache record under `key`.
+    pub fn encode(&self, key: &crate::cache::RecordKey) -> Vec<u8> {
+        use crate::cache::Section;
+        let flat: Vec<FlatSample> = self.samples.iter().map(FlatSample::of).collect();
+        let rows: Vec<u32> = self.entries.iter().map(|e| e.0).collect();
+        let weights: Vec<[f32; 3]> = self.entries.iter().map(|e| e.1).collect();
+        let rays = [self.rays as f64];
+        crate::cache::encode(
+            key,
+            &[
+                Section::u32s(TAG_OFFSETS, &self.offsets),
+                Section::u32s(TAG_AA, &self.aa_count),
+                Section::of(TAG_SAMPLES, &flat),
+                Section::u32s(TAG_ENTRIES, &rows),
+                Section::of(TAG_ENTRIES + 16, &weights),
+                Section::f64s(TAG_RAYS, &rays),
+            ],
+        )
+    }
+
+    /// The geometry of a cache record [`Self::encode`] wrote for `opts`, over a scene of
+    /// `triangles` triangles and a mesh of `rows` rows; `None` when any part is missing,
+    /// inconsistent or out of range (the record is then rebuilt, never trusted).
+    pub fn decode(
+        r: &crate::cache::MappedRecord,
+        opts: &RenderOptions,
+        triangles: usize,
+        rows: usize,
+    ) -> Option<ViewGeometry> {
+        let n = opts.width * opts.height;
+        let offsets = r.u32s(TAG_OFFSETS).ok()?.to_vec();
+        let aa_count = r.u32s(TAG_AA).ok()?.to_vec();
+        let flat = r.section::<FlatSample>(TAG_SAMPLES).ok()?;
+        let rows_of = r.u32s(TAG_ENTRIES).ok()?;
+        let weights = r.section::<[f32; 3]>(TAG_ENTRIES + 16).ok()?;
+        let rays = *r.f64s(TAG_RAYS).ok()?.first()?;
+        let ok = offsets.len() == n + 1
+            && aa_count.len() == n
+            && rows_of.len() == weights.len()
+            && offsets.windows(2).all(|w| w[0] <= w[1])
+            && offsets.last().copied() == Some(flat.len() as u32)
+            && offsets.first() == Some(&0);
+        if !ok {
+            return None;
+        }
+        let samples: Option<Vec<Sample>> = flat.iter().map(FlatSample::sample).collect();
+        let samples = samples?;
+        let entries = rows_of.len();
+        let in_range = samples.iter().all(|s| match s.kind {
+            Kind::Surface(f) => {
+                (f.start as usize + f.len as usize) <= entries && (f.tri as usize) < triangles
+            }
+            _ => true,
+        }) && rows_of.iter().all(|&r| {
+            r & SKY_BIN != 0 && ((r & !SKY_BIN) as usize) < SKY_BINS * SKY_BINS
+                || (r as usize) < rows
+        });
+        if !in_range {
+            return None;
+        }
+        Some(ViewGeometry {
+            opts: *opts,
+            offsets,
+            samples,
+            aa_count,
+            entries: rows_of
+                .iter()
+                .copied()
+                .zip(weights.iter().copied())
+                .collect(),
+            rays: rays as u64,
+        })
     }
 
     /// Bytes the geometry holds (for reports and memory budgets).

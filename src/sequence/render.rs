@@ -6,7 +6,7 @@
 use super::config::{Quality, SkySpec};
 use super::report::Report;
 use super::step::{Engine, EngineOptions, Step, StepTime};
-use crate::cache::Store;
+use crate::cache::{RecordKey, Store};
 use crate::error::{Error, Result};
 use crate::photometry::EFFICACY_LM_PER_W;
 use crate::render::exr::write_exr;
@@ -55,8 +55,49 @@ pub struct Renderer<'a> {
     engine: Engine<'a>,
 
     geometry: ViewGeometry,
-    /// Seconds spent tracing the camera's geometry.
+    /// Seconds spent tracing (or reading) the camera's geometry.
     pub geometry_seconds: f64,
+    /// Whether the camera's geometry was read from the cache.
+    pub geometry_from_cache: bool,
+}
+
+/// Version of the camera geometry records: bump when what they hold changes.
+const VIEW_VERSION: u32 = 1;
+
+/// The cache key of a camera's geometry: the operator's key (geometry, glazing, sensors
+/// and the mesh the gather rows index), or the scene's hash without an operator, with the
+/// view and every render option that changes the rays.
+fn view_key(scene: &Scene, quality: &Quality, camera: &Camera, with_mesh: bool) -> RecordKey {
+    let base = if with_mesh {
+        super::operator::key(scene, &quality.transport)
+            .to_bytes()
+            .to_vec()
+    } else {
+        crate::cache::scene_hash(scene, &Default::default(), b"view without mesh")
+            .0
+            .to_vec()
+    };
+    let o = &camera.options;
+    let mut h = blake3::Hasher::new();
+    h.update(b"daystep view geometry\0");
+    h.update(&VIEW_VERSION.to_le_bytes());
+    h.update(&base);
+    h.update(camera.scene_view(scene).options().as_bytes());
+    for x in [
+        o.width as u64,
+        o.height as u64,
+        u64::from(o.samples),
+        u64::from(o.gather_rays),
+        o.seed,
+    ] {
+        h.update(&x.to_le_bytes());
+    }
+    RecordKey {
+        scene: crate::cache::SceneHash(*h.finalize().as_bytes()),
+        kind: crate::cache::KIND_VIEW,
+        direction: 0,
+        resolution: o.width as u32,
+    }
 }
 
 /// One rendered step.
@@ -85,9 +126,22 @@ impl<'a> Renderer<'a> {
         let t0 = Instant::now();
         let view = camera.scene_view(scene);
         let mesh = engine.operator().map(|t| &t.mesh);
-        let geometry = ViewGeometry::new(engine.tracer(), &view, mesh, &camera.options);
+        let key = view_key(scene, quality, camera, mesh.is_some());
+        let rows = engine.operator().map_or(0, |t| t.rows());
+        let cached = store
+            .get(&key)
+            .and_then(|r| ViewGeometry::decode(&r, &camera.options, scene.triangles.len(), rows));
+        let geometry_from_cache = cached.is_some();
+        let geometry = cached.unwrap_or_else(|| {
+            let g = ViewGeometry::new(engine.tracer(), &view, mesh, &camera.options);
+            if store.is_enabled() {
+                store.put(&key, &g.encode(&key));
+            }
+            g
+        });
         Renderer {
             geometry_seconds: t0.elapsed().as_secs_f64(),
+            geometry_from_cache,
             engine,
             geometry,
         }
@@ -317,8 +371,10 @@ pub struct RenderReport {
     pub geometry_rays: u64,
     /// Bytes the camera's geometry holds.
     pub geometry_bytes: usize,
-    /// Seconds tracing it.
+    /// Seconds tracing (or reading) it.
     pub geometry_seconds: f64,
+    /// Whether it was read from the cache.
+    pub geometry_from_cache: bool,
     /// Seconds of the engine's set-up (operator).
     pub setup_seconds: f64,
     /// Per rendered frame: wall time of the step, s (median).
@@ -411,6 +467,7 @@ pub fn run_render(
         report.geometry_rays = r.geometry().rays;
         report.geometry_bytes = r.geometry().bytes();
         report.geometry_seconds = r.geometry_seconds;
+        report.geometry_from_cache = r.geometry_from_cache;
         report.setup_seconds = r.engine().setup_times().total();
         report
             .warnings

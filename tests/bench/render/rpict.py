@@ -30,6 +30,8 @@ import validate as v  # noqa: E402  (the office's conversion to Radiance, the sk
 
 REPO = v.REPO
 VIEW = "-vtv -vp 3 7.5 1.5 -vd 0 -1 -0.1 -vu 0 0 1 -vh 70 -vv 50"
+# From beside the window towards the back wall.
+VIEW_BACK = "-vtv -vp 3 0.6 1.5 -vd 0 1 -0.15 -vu 0 0 1 -vh 80 -vv 60"
 # Brute force: no irradiance cache, deep bounces (validate.py's reference, fewer
 # divisions: region means average thousands of pixels).
 REFERENCE = "-ab 10 -aa 0 -as 0 -ad 2048 -lr 0 -lw 1e-5 -dj 0 -dt 0 -dc 1 -st 0"
@@ -39,8 +41,8 @@ RPICT_HONEYBEE = "-aa 0.25 -ab 2 -ad 512 -dc 0.25 -st 0.85 -lw 0.05 -as 128 -ar 
 RPICT_AB5 = RPICT_HONEYBEE.replace("-ab 2", "-ab 5").replace("-lw 0.05", "-lw 0.002")
 
 
-def pixel_rays(w, h, env, cwd):
-    out = v.run(["vwrays", "-fa", "-pa", "0", "-x", str(w), "-y", str(h)] + VIEW.split(), env, cwd=cwd)
+def pixel_rays(w, h, env, cwd, view):
+    out = v.run(["vwrays", "-fa", "-pa", "0", "-x", str(w), "-y", str(h)] + view.split(), env, cwd=cwd)
     rays = [l for l in out.splitlines() if l.strip()]
     if len(rays) != w * h:
         sys.exit(f"vwrays gave {len(rays)} rays for {w}x{h}")
@@ -71,17 +73,38 @@ def classify(octree, rays, env, cwd):
     return px
 
 
-def regions(px, direct):
+def regions(px, direct, w, h):
+    """Pixels by what Radiance's centre ray meets, each region eroded by one pixel: a pixel
+    whose 8 neighbours are not all of its region is left out, because daystep's pixel is
+    the mean over its area (antialiased) and Radiance's reference is its centre ray, which
+    differ wherever a pixel straddles an edge of high contrast (window frame, sun patch)."""
     floor = [i for i, (m, p) in enumerate(px) if m == "m_floor"]
     top = max((direct[i] for i in floor), default=0.0)
-    sun = [i for i in floor if top > 0 and direct[i] > 0.5 * top]
-    return {
-        "window wall": [i for i, (m, p) in enumerate(px) if m == "m_wall" and p[1] < 0.01],
-        "back wall": [i for i, (m, p) in enumerate(px) if m == "m_wall" and p[1] > 7.99],
-        "floor": floor,
-        "floor sun patch": sun,
-        "ceiling": [i for i, (m, p) in enumerate(px) if m == "m_ceiling"],
-    }
+    sun = {i for i in floor if top > 0 and direct[i] > 0.5 * top}
+    label = []
+    for i, (m, p) in enumerate(px):
+        if i in sun:
+            label.append("floor sun patch")
+        elif m == "m_floor":
+            label.append("floor (shade)")
+        elif m == "m_wall" and abs(p[1]) < 1e-3:
+            label.append("window wall")
+        elif m == "m_wall" and p[1] > 7.999:
+            label.append("back wall")
+        elif m == "m_wall":
+            label.append("side walls and reveals")
+        elif m == "m_ceiling":
+            label.append("ceiling")
+        else:
+            label.append(m)
+    out = {}
+    for i, lab in enumerate(label):
+        x, y = i % w, i // w
+        inner = all(0 <= x + dx < w and 0 <= y + dy < h and label[(y + dy) * w + x + dx] == lab
+                    for dx in (-1, 0, 1) for dy in (-1, 0, 1))
+        if inner:
+            out.setdefault(lab, []).append(i)
+    return out
 
 
 def read_hdr_values(path, env):
@@ -213,7 +236,8 @@ def main():
          ["--time", "2024-03-21T12:00", "--sky", "cie-overcast", "--dhi", "100"]),
     ]
     w, h = a.width, a.height
-    print(f"view `{VIEW}`, {w}×{h} pixels; reference `rtrace {a.reference}` per pixel centre")
+    print(f"{w}×{h} pixels; reference `rtrace {a.reference}` per pixel centre; daystep "
+          f"`--gather {a.gather}`, default quality, {a.nproc} threads")
     print()
     for key, skycmd, dsargs in instants:
         if a.only and a.only != key:
@@ -224,53 +248,67 @@ def main():
         octree = d / "scene.oct"
         octree.write_bytes(subprocess.run(["oconv", "-f", "sky.rad", "../scene.rad"], env=env,
                                           cwd=d, capture_output=True, check=True).stdout)
-        rays = pixel_rays(w, h, env, d)
-        px = classify(octree, rays, env, d)
-        direct, _ = rtrace_values(octree, rays, "-ab 0 -dj 0 -dt 0 -dc 1 -st 0", env, a.nproc, d)
-        reg = regions(px, direct)
-        ref, ref_s = rtrace_values(octree, rays, a.reference, env, a.nproc, d)
-        times = {"reference rtrace": ref_s}
-        for name, opts in (("rpict -ab 5", RPICT_AB5), ("rpict Honeybee", RPICT_HONEYBEE)):
-            t0 = time.perf_counter()
-            with open(d / "rpict.hdr", "wb") as f:
-                subprocess.run(["rpict", "-pa", "0", "-x", str(w), "-y", str(h)] + VIEW.split()
-                               + v.two_sided(opts).split() + [str(octree)], env=env, stdout=f,
-                               check=True)
-            times[name] = time.perf_counter() - t0
-        # daystep, cold then warm.
-        cache = d / "cache"
-        if cache.exists():
-            shutil.rmtree(cache)
-        ds = {}
-        for run in ("cold", "warm"):
-            out = d / f"daystep-{run}"
-            if out.exists():
-                shutil.rmtree(out)
-            cmd = [a.daystep, "render", str(scene_path), "--view", VIEW, "-x", str(w), "-y", str(h),
-                   "--gather", str(a.gather), "--hdr", "--out", str(out), "--cache", str(cache),
-                   "--threads", str(a.nproc)] + dsargs
-            t0 = time.perf_counter()
-            v.run(cmd, env)
-            times[f"daystep {run}"] = time.perf_counter() - t0
-            ds[run] = out
-        hdr = next(ds["warm"].glob("*.hdr"))
-        got = read_hdr_values(hdr, env)
-        print(f"## {key}: `{' '.join(skycmd)}`")
-        print()
-        print("| region | pixels | reference cd/m² | daystep cd/m² | difference |")
-        print("|---|---|---|---|---|")
-        for name, idx in reg.items():
-            if not idx:
-                continue
-            r = sum(ref[i] for i in idx) / len(idx)
-            g = sum(got[i] for i in idx) / len(idx)
-            print(f"| {name} | {len(idx)} | {r:.1f} | {g:.1f} | {100 * (g - r) / r:+.1f} % |")
-        print()
-        print("| run | seconds |")
-        print("|---|---|")
-        for k, s in times.items():
-            print(f"| {k} | {s:.1f} |")
-        print()
+        for vname, view in (("toward the window", VIEW), ("toward the back wall", VIEW_BACK)):
+            compare_view(a, env, d, key, skycmd, dsargs, vname, view, scene_path, octree)
+
+
+def compare_view(a, env, d, key, skycmd, dsargs, vname, view, scene_path, octree):
+    """One instant and camera: region means of the reference, of rpict and of daystep."""
+    w, h = a.width, a.height
+    d = d / ("window" if view == VIEW else "back")
+    d.mkdir(exist_ok=True)
+    rays = pixel_rays(w, h, env, d, view)
+    px = classify(octree, rays, env, d)
+    direct, _ = rtrace_values(octree, rays, "-ab 0 -dj 0 -dt 0 -dc 1 -st 0", env, a.nproc, d)
+    reg = regions(px, direct, w, h)
+    ref, ref_s = rtrace_values(octree, rays, a.reference, env, a.nproc, d)
+    times = {"reference rtrace (per pixel centre)": ref_s}
+    images = {}
+    for name, opts in (("rpict -ab 5", RPICT_AB5), ("rpict Honeybee", RPICT_HONEYBEE)):
+        t0 = time.perf_counter()
+        path = d / f"rpict-{name.split()[-1]}.hdr"
+        with open(path, "wb") as f:
+            subprocess.run(["rpict", "-pa", "0", "-x", str(w), "-y", str(h)] + view.split()
+                           + v.two_sided(opts).split() + [str(octree)], env=env, stdout=f,
+                           check=True)
+        times[name] = time.perf_counter() - t0
+        images[name] = read_hdr_values(path, env)
+    # daystep, cold then warm.
+    cache = d / "cache"
+    if cache.exists():
+        shutil.rmtree(cache)
+    for run in ("cold", "warm"):
+        out = d / f"daystep-{run}"
+        if out.exists():
+            shutil.rmtree(out)
+        cmd = [a.daystep, "render", str(scene_path), "--view", view, "-x", str(w), "-y", str(h),
+               "--gather", str(a.gather), "--hdr", "--out", str(out), "--cache", str(cache),
+               "--threads", str(a.nproc)] + dsargs
+        t0 = time.perf_counter()
+        v.run(cmd, env)
+        times[f"daystep {run}"] = time.perf_counter() - t0
+        if run == "warm":
+            images["daystep"] = read_hdr_values(next(out.glob("*.hdr")), env)
+    print(f"## {key}, {vname}: `{' '.join(skycmd)}`, view `{view}`")
+    print()
+    names = list(images)
+    print("| region | pixels | reference cd/m² | " + " | ".join(names) + " |")
+    print("|---|---|---|" + "---|" * len(names))
+    for name, idx in reg.items():
+        if len(idx) < 20:
+            continue
+        r = sum(ref[i] for i in idx) / len(idx)
+        cells = []
+        for n in names:
+            g = sum(images[n][i] for i in idx) / len(idx)
+            cells.append(f"{g:.1f} ({100 * (g - r) / r:+.1f} %)")
+        print(f"| {name} | {len(idx)} | {r:.1f} | " + " | ".join(cells) + " |")
+    print()
+    print("| run | seconds |")
+    print("|---|---|")
+    for k, t in times.items():
+        print(f"| {k} | {t:.1f} |")
+    print(flush=True)
 
 
 if __name__ == "__main__":
