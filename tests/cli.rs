@@ -261,3 +261,69 @@ fn a_closed_stderr_does_not_change_the_exit_code() {
     assert_eq!(o.status.code(), Some(1));
     assert!(o.stdout.is_empty());
 }
+
+#[test]
+fn render_writes_its_files_and_refuses_bad_cameras_naming_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let scene = office();
+    let base = [
+        "render",
+        scene.to_str().unwrap(),
+        "-x",
+        "24",
+        "-y",
+        "24",
+        "--samples",
+        "1",
+        "--gather",
+        "4",
+        "--time",
+        "2024-03-21T12:00",
+        "--sky",
+        "perez",
+        "--dni",
+        "700",
+        "--dhi",
+        "120",
+        "--quality",
+        "draft",
+        "--no-cache",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let fisheye = "-vta -vp 3 4 1.2 -vd 0 -1 0 -vu 0 0 1 -vh 180 -vv 180";
+    let mut args = base.to_vec();
+    args.extend(["--view", fisheye, "--falsecolor", "--hdr", "--glare"]);
+    let o = daystep(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in [
+        "20240321_1200.exr",
+        "20240321_1200.png",
+        "20240321_1200_falsecolor.png",
+        "20240321_1200.hdr",
+        "frames.csv",
+        "report.json",
+    ] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+    let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let row: Vec<&str> = csv.lines().nth(1).unwrap().split(',').collect();
+    let dgp: f64 = row[row.len() - 3].parse().unwrap();
+    assert!((0.0..=1.0).contains(&dgp), "dgp {dgp}");
+    // Glare of a perspective view, no camera at all, a view value that is not a number.
+    for (extra, flag) in [
+        (
+            vec!["--view", "-vtv -vp 3 4 1.2 -vd 0 -1 0", "--glare"],
+            "--glare",
+        ),
+        (vec![], "--view"),
+        (vec!["--view", "-vtv -vp 3 x 1.2"], "-vp"),
+    ] {
+        let mut args = base.to_vec();
+        args.extend(extra);
+        let o = daystep(&args);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        assert!(stderr(&o).contains(flag), "{flag}: {}", stderr(&o));
+    }
+}

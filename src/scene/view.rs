@@ -85,7 +85,7 @@ impl View {
                 v.parse::<f64>()
                     .ok()
                     .filter(|x| x.is_finite())
-                    .ok_or_else(|| bad(v, "view option value must be a finite number"))
+                    .ok_or_else(|| bad(v, &format!("{t} takes finite numbers")))
             };
             let vec3 = || -> Result<DVec3> { Ok(DVec3::new(num(1)?, num(2)?, num(3)?)) };
             match t {
