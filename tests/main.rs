@@ -12,6 +12,7 @@ mod cli; // the binary end to end: exit codes, messages naming file:line, output
 mod df; // daylight factor: 100 % in the open, the vertical formula, roof-opening sky component, CLI
 mod extent; // site context of any size: the office on a 1 km ground and in a ring of blocks
 mod extremes; // low sun, polar day and night, turbidity limits, slivers, far coordinates
+mod imagesky; // HDR image skies: uniform image πL, images of the CIE overcast sky in both mappings
 mod generated_scenes; // the generated office and building: areas, normals, closure, triangle target, bundled files
 mod layers; // the layer rule of lib.rs: lower layers never import higher ones
 mod parsers; // every parser under arbitrary and mutated input: no panic, hang or unbounded allocation

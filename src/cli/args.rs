@@ -27,8 +27,21 @@ pub enum SkyArg {
     Cie,
     /// Preetham clear sky with sun (--turbidity).
     Preetham,
+    /// An HDR image (--image FILE.exr|.hdr, --mapping equirect|angular, --rotate DEG;
+    /// with --dni its saturated pixels become the sun). `instant` only.
+    Image,
     /// No daylight.
     None,
+}
+
+/// Image mappings for `--mapping`.
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum MappingArg {
+    /// Equirectangular, full sphere: azimuth clockwise from north across (north at the
+    /// edges), zenith angle down.
+    Equirect,
+    /// Angular fisheye looking up (Radiance -vta -vh 180 -vv 180), north at the top.
+    Angular,
 }
 
 /// Subcommands.
@@ -102,6 +115,15 @@ pub struct SkyParams {
     /// Dew point for the Perez luminous efficacy, °C.
     #[arg(long)]
     pub dew_point: Option<f64>,
+    /// The HDR image of `--sky image` (OpenEXR or Radiance HDR), radiance W·sr⁻¹·m⁻².
+    #[arg(long)]
+    pub image: Option<PathBuf>,
+    /// How the image maps onto the sky.
+    #[arg(long, value_enum, default_value = "equirect")]
+    pub mapping: MappingArg,
+    /// Turn the image clockwise seen from above, degrees.
+    #[arg(long, default_value_t = 0.0)]
+    pub rotate: f64,
 }
 
 /// Arguments of `daystep render`.

@@ -62,6 +62,13 @@ pub fn sky_spec(sky: SkyArg, p: &SkyParams) -> Result<SkySpec> {
             turbidity: need("--turbidity", p.turbidity, "preetham")?,
         },
         SkyArg::None => SkySpec::None,
+        SkyArg::Image => {
+            return Err(Error::arg(
+                "--sky",
+                "image",
+                "image skies are read by `daystep instant` only, so far",
+            ))
+        }
     })
 }
 
@@ -175,6 +182,9 @@ mod tests {
             sky_type: None,
             turbidity: None,
             dew_point: None,
+            image: None,
+            mapping: crate::cli::args::MappingArg::Equirect,
+            rotate: 0.0,
         };
         let e = sky_spec(SkyArg::Perez, &only_dni).unwrap_err();
         let (shown, path, _, _) = crate::error::input_parts(e);

@@ -1,11 +1,12 @@
 //! `daystep instant`: one instant's illuminance at every sensor.
 
-use super::args::InstantArgs;
+use super::args::{InstantArgs, MappingArg, SkyArg};
 use super::config;
 use super::messages::{note, warnings};
 use crate::error::Result;
 use crate::scene::Scene;
 use crate::sequence;
+use crate::sky::image::Mapping;
 
 /// Runs `daystep instant`: writes `sensors.csv` and `report.json` into `--out` and
 /// summarises the run on standard error.
@@ -14,12 +15,45 @@ use crate::sequence;
 /// Bad arguments or scene ([`crate::Error::Input`]), unwritable output.
 pub fn run(a: InstantArgs) -> Result<()> {
     let q = config::quality(&a.run.quality, a.run.seed)?;
-    let spec = config::sky_spec(a.sky, &a.params)?;
     let scene = Scene::load(&a.scene)?;
     warnings(&scene.warnings);
     let (utc, local) = crate::site::parse_time(&a.time, scene.site.utc_offset_h)?;
     let store = config::store(&a.run.cache, a.run.no_cache);
-    let result = sequence::instant::run_instant_cached(&scene, utc, local, &spec, &q, &store)?;
+    let result = if a.sky == SkyArg::Image {
+        let path = a.params.image.as_ref().ok_or_else(|| {
+            crate::Error::arg("--image", "(missing)", "--sky image needs --image FILE")
+        })?;
+        let mapping = match a.params.mapping {
+            MappingArg::Equirect => Mapping::Equirect,
+            MappingArg::Angular => Mapping::Angular,
+        };
+        let sky = sequence::sky::image_sky(
+            path,
+            mapping,
+            a.params.rotate,
+            a.params.dni,
+            scene.ground_reflectance,
+        )?;
+        let mut report = sequence::Report {
+            version: env!("CARGO_PKG_VERSION").into(),
+            command: "instant".into(),
+            scene: scene.path.display().to_string(),
+            time_local: local.format("%Y-%m-%dT%H:%M:%S").to_string(),
+            time_utc: utc.to_rfc3339(),
+            quality: q.name.into(),
+            sky: sky.description.clone(),
+            warnings: scene.warnings.clone(),
+            ..sequence::Report::default()
+        };
+        let t0 = std::time::Instant::now();
+        let mut r = sequence::instant::run_sky_cached(&scene, &sky, &q, &store, &mut report);
+        r.report.cache = Some(store.stats());
+        r.report.total_seconds = t0.elapsed().as_secs_f64();
+        r
+    } else {
+        let spec = config::sky_spec(a.sky, &a.params)?;
+        sequence::instant::run_instant_cached(&scene, utc, local, &spec, &q, &store)?
+    };
     sequence::write_instant(&scene, &result, &a.out)?;
     let r = &result.report;
     warnings(&r.warnings);

@@ -52,8 +52,18 @@ impl InstantResult {
 /// Runs one instant on `scene` for the sky `sky` (already built for the instant: stages 2–7
 /// of the step), without a disk cache. `report` carries what the caller knows (sun, sky).
 pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report) -> InstantResult {
-    let store = Store::disabled();
-    let engine = Engine::new(scene, quality, &store, &EngineOptions::default());
+    run_sky_cached(scene, sky, quality, &Store::disabled(), report)
+}
+
+/// [`run_sky`] through the cache `store` (an image sky, or any sky built by the caller).
+pub fn run_sky_cached(
+    scene: &Scene,
+    sky: &Sky,
+    quality: &Quality,
+    store: &Store,
+    report: &mut Report,
+) -> InstantResult {
+    let engine = Engine::new(scene, quality, store, &EngineOptions::default());
     let mut r = std::mem::take(report);
     r.warnings.extend(engine.directions().store().warnings());
     let step = engine.step_sky(sky, None, true, r, None);

@@ -4,6 +4,7 @@
 //! ground glow of luminance ρ_g·E_h/π, E_h the global horizontal irradiance (sky + sun).
 
 pub mod cie;
+pub mod image;
 pub mod perez;
 pub mod preetham;
 
@@ -15,6 +16,13 @@ pub trait SkyDistribution: Send + Sync {
     /// RGB radiance (W·sr⁻¹·m⁻²) arriving from unit direction `dir` with `dir.z > 0`
     /// (scene frame: x east, y north, z up; `dir` points towards the sky).
     fn radiance(&self, dir: DVec3) -> Rgb;
+
+    /// Mean radiance over the spherical triangle `v` (unit vertices, above the horizon),
+    /// when the distribution can integrate it exactly (image skies); `None`: the sky tree
+    /// samples [`Self::radiance`] instead.
+    fn mean_over(&self, _v: &[DVec3; 3]) -> Option<Rgb> {
+        None
+    }
 }
 
 /// The sun as a parallel source.

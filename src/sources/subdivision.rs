@@ -91,7 +91,13 @@ fn node_radiance_split(sky: &Sky, key: SkyNodeKey, kids: &[[DVec3; 3]; 4]) -> (R
     };
     // Centres of the four children: a 4-point centroid rule (same cost as the paper's
     // vertices + centre, smaller error on curved radiance; see docs/design.md).
-    let l = kids.map(|k| sky.radiance(lift(spherical_triangle::centre(k[0], k[1], k[2]))));
+    // A distribution that integrates exactly (an image) gives each child's mean instead.
+    let l = kids.map(|k| {
+        sky.distribution
+            .as_ref()
+            .and_then(|d| d.mean_over(&k))
+            .unwrap_or_else(|| sky.radiance(lift(spherical_triangle::centre(k[0], k[1], k[2]))))
+    });
     let w = kids.map(|k| spherical_triangle::solid_angle(k[0], k[1], k[2]));
     let total: f64 = w.iter().sum();
     let mean = (0..4).fold(Rgb::ZERO, |a, k| a + l[k] * w[k]) / total;
