@@ -391,3 +391,93 @@ fn the_camera_geometry_is_cached_and_a_damaged_record_is_rebuilt() {
     assert!(!cached, "a truncated record is not trusted");
     assert_eq!(first.rgb, third.rgb);
 }
+
+/// The glTF of a sequence: the Khronos layout daystep documents (export::gltf), and a
+/// plane under a CIE overcast sky of DHI E reads E (illuminance 179 E) and ρE/π (radiance)
+/// at every vertex; one frame per rendered frame.
+#[test]
+fn the_gltf_holds_every_frame_and_a_plane_reads_its_closed_form() {
+    use daystep::sequence::annual::RunControl;
+    use daystep::sequence::render::{run_render, FramePlan, RenderOutputs};
+    use daystep::sequence::{SkySpec, StepTime};
+    use std::sync::atomic::AtomicBool;
+    let (rho, dhi) = (0.5, 100.0);
+    let scene = plane(rho);
+    let dir = tempfile::tempdir().unwrap();
+    let glb = dir.path().join("plane.glb");
+    let frames: Vec<FramePlan> = ["2024-03-21T10:00", "2024-03-21T12:00"]
+        .iter()
+        .map(|t| {
+            let (utc, local) = daystep::site::parse_time(t, 0.0).unwrap();
+            FramePlan::new(StepTime { utc, local }, SkySpec::CieOvercast { dhi })
+        })
+        .collect();
+    let camera = Camera {
+        view: view("-vtl -vp 0 0 5 -vd 0 0 -1 -vu 0 1 0 -vh 8 -vv 6"),
+        options: small(Quantity::Radiance),
+    };
+    let outputs = RenderOutputs {
+        gltf: Some(glb.clone()),
+        command: "test".into(),
+        ..RenderOutputs::default()
+    };
+    let stop = AtomicBool::new(false);
+    let control = RunControl {
+        stop: &stop,
+        progress: &|_, _| {},
+    };
+    let store = Store::disabled();
+    let q = Quality::preset("draft").unwrap();
+    run_render(
+        &scene,
+        &q,
+        &store,
+        &camera,
+        &frames,
+        dir.path(),
+        &outputs,
+        &control,
+    )
+    .unwrap();
+    let g = gltf::Gltf::from_slice(&std::fs::read(&glb).unwrap()).unwrap();
+    let bin = g.blob.as_ref().unwrap();
+    let extras: serde_json::Value =
+        serde_json::from_str(g.document.as_json().asset.extras.as_ref().unwrap().get()).unwrap();
+    let d = &extras["daystep"];
+    assert_eq!(d["frames"].as_array().unwrap().len(), 2);
+    let scale = d["radiance_scale"].as_f64().unwrap();
+    let floats = |acc: gltf::Accessor| -> Vec<f32> {
+        let v = acc.view().unwrap();
+        let off = v.offset() + acc.offset();
+        bin[off..off + acc.count() * acc.size()]
+            .chunks(4)
+            .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
+            .collect()
+    };
+    let prim = g.meshes().next().unwrap().primitives().next().unwrap();
+    let get = |name: &str| {
+        prim.attributes()
+            .find(|(s, _)| s.to_string() == name)
+            .map(|(_, a)| floats(a))
+            .unwrap_or_else(|| panic!("no {name}"))
+    };
+    let ill = get("_ILLUMINANCE");
+    let lum = get("_LUMINANCE");
+    let col = get("COLOR_0");
+    let (e_lux, l_rad) = (179.0 * dhi, rho * dhi / PI);
+    for (k, (i, l)) in ill.iter().zip(&lum).enumerate() {
+        assert!(
+            (f64::from(*i) - e_lux).abs() < 0.01 * e_lux,
+            "vertex {k}: {i} lux"
+        );
+        assert!(
+            (f64::from(*l) - 179.0 * l_rad).abs() < 0.01 * 179.0 * l_rad,
+            "vertex {k}: {l} cd/m2"
+        );
+        let c = f64::from(col[3 * k + 1]) * scale;
+        assert!(
+            (c - l_rad).abs() < 0.01 * l_rad,
+            "vertex {k}: COLOR_0 × scale {c}"
+        );
+    }
+}

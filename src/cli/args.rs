@@ -60,7 +60,7 @@ pub enum Command {
     /// Images from the solution (final gather): per frame a linear HDR OpenEXR, a
     /// tone-mapped PNG and optionally a falsecolor map; for a weather file's days, a
     /// sequence with frames.csv and a playable preview. Resumable.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Assembles the output folders of `annual --shard k/n` runs into one run's files.
     Merge(MergeArgs),
     /// Inspect or maintain a projection cache folder.
@@ -197,6 +197,10 @@ pub struct RenderArgs {
     /// Also write a Radiance HDR picture per frame ({frame}.hdr).
     #[arg(long)]
     pub hdr: bool,
+    /// Also write the solution mesh with one frame per rendered frame (glTF binary):
+    /// radiance as COLOR_0, illuminance and luminance as custom attributes.
+    #[arg(long)]
+    pub gltf: Option<PathBuf>,
     /// Daylight glare probability and vertical eye illuminance per frame (frames.csv
     /// columns dgp, ev_lux): angular fisheye views (-vta) only.
     #[arg(long)]

@@ -41,7 +41,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Df(a) => df::run(a),
         Command::Convergence(a) => convergence::run(a),
         Command::Annual(a) => annual::run(a),
-        Command::Render(a) => render::run(a),
+        Command::Render(a) => render::run(*a),
         Command::Merge(a) => merge::run(a),
         Command::Cache { action } => cache::run(action),
     }

@@ -130,6 +130,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
             ..Falsecolor::default()
         }),
         hdr: a.hdr,
+        gltf: a.gltf.clone(),
         glare: a.glare.then(|| GlareOptions {
             threshold: match a.glare_threshold {
                 Some(t) if t > 100.0 => Threshold::Absolute(t),

@@ -10,6 +10,7 @@
 //! gives the same guarantee (a complete-looking file is complete) without holding a year of
 //! rows in memory.
 
+pub mod gltf;
 pub mod plot;
 
 use crate::error::{Error, Result};

@@ -334,6 +334,8 @@ pub struct RenderOutputs {
     pub hdr: bool,
     /// Glare (DGP, vertical eye illuminance) per frame: angular fisheye views only.
     pub glare: Option<GlareOptions>,
+    /// The solution mesh with one frame per rendered frame, as glTF binary.
+    pub gltf: Option<std::path::PathBuf>,
     /// The command line, for the files' provenance.
     pub command: String,
 }
@@ -474,6 +476,7 @@ pub fn run_render(
             .extend(r.engine().directions().store().warnings());
     }
     let (mut step_s, mut gather_s) = (Vec::new(), Vec::new());
+    let mut gltf_frames = Vec::new();
     for plan in todo {
         if control.stop.load(Ordering::SeqCst) {
             report.interrupted = true;
@@ -520,6 +523,19 @@ pub fn run_render(
         }
         row.sky = frame.step.report.sky.clone();
         row.seconds = t.elapsed().as_secs_f64();
+        if outputs.gltf.is_some() {
+            if let (Some(op), Some(st)) = (renderer.engine().operator(), frame.step.state.as_ref())
+            {
+                let lux = frame.step.sensors.iter().map(|v| v.lux).collect();
+                gltf_frames.push(crate::export::gltf::frame_of(
+                    op,
+                    st,
+                    &frame.step.mesh_direct,
+                    plan.label.clone(),
+                    lux,
+                ));
+            }
+        }
         rows.push((plan.name.clone(), row.csv()));
         write_frames_csv(out, frames, &rows)?;
         report.computed += 1;
@@ -527,6 +543,25 @@ pub fn run_render(
     }
     if frames.len() > 1 && !report.interrupted {
         write_previews(out, frames, outputs)?;
+    }
+    if let (Some(path), Some(r)) = (&outputs.gltf, &renderer) {
+        match r.engine().operator() {
+            Some(op) if !gltf_frames.is_empty() => {
+                if report.resumed > 0 {
+                    report.warnings.push(format!(
+                        "{}: holds the {} frames this run rendered, not the {} resumed ones",
+                        path.display(),
+                        gltf_frames.len(),
+                        report.resumed
+                    ));
+                }
+                let sensors: Vec<_> = scene.sensors.iter().map(|s| s.position).collect();
+                crate::export::gltf::geometry_of(scene, op).write(path, &gltf_frames, &sensors)?;
+            }
+            _ => report
+                .skipped
+                .push("glTF: the scene has no interreflection mesh (every surface black)".into()),
+        }
     }
     report.median_step_seconds = median(step_s);
     report.median_gather_seconds = median(gather_s);

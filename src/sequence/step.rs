@@ -89,6 +89,9 @@ pub struct Step {
     pub sun_interpolation_err: Vec<f64>,
     /// The step's report: sun, counts, stage times, what was skipped, the solve.
     pub report: Report,
+    /// Per mesh row, the direct irradiance (RGB W/m²) the solve started from, when
+    /// [`EngineOptions::mesh_solution`] asked for the mesh solution (else empty).
+    pub mesh_direct: Vec<Rgb>,
 }
 
 /// What stage 5 yields: the sensors' interreflected light, the solution for the next
@@ -100,6 +103,7 @@ struct Interreflected {
     iteration_error: f64,
     state: Option<TransportState>,
     surfaces: Vec<f64>,
+    mesh_direct: Vec<Rgb>,
 }
 
 /// What a run keeps across its steps: the per-direction data (fine, and one level
@@ -429,6 +433,7 @@ impl<'a> Engine<'a> {
                 sources,
                 elements: None,
                 sun_interpolation_err: interp,
+                mesh_direct: Vec::new(),
                 report,
             };
         }
@@ -462,6 +467,7 @@ impl<'a> Engine<'a> {
             sources,
             elements,
             sun_interpolation_err: Vec::new(),
+            mesh_direct: light.mesh_direct,
             report,
         }
     }
@@ -500,6 +506,9 @@ impl<'a> Engine<'a> {
                 report.transport_solve = Some(rep);
                 out.iteration_error = rep.iteration_error;
                 out.state = Some(next);
+                if self.opts.mesh_solution {
+                    out.mesh_direct = e;
+                }
             }
             None => {
                 report.skipped.push(if needs_interreflection(scene) {
