@@ -91,6 +91,10 @@ pub struct InstantArgs {
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
+    /// Also write the solution mesh (glTF binary): radiance as COLOR_0, illuminance and
+    /// luminance as custom attributes.
+    #[arg(long)]
+    pub gltf: Option<PathBuf>,
     /// Quality, cache and seed.
     #[command(flatten)]
     pub run: RunArgs,

@@ -19,6 +19,10 @@ pub fn run(a: InstantArgs) -> Result<()> {
     warnings(&scene.warnings);
     let (utc, local) = crate::site::parse_time(&a.time, scene.site.utc_offset_h)?;
     let store = config::store(&a.run.cache, a.run.no_cache);
+    let opts = sequence::EngineOptions {
+        mesh_solution: a.gltf.is_some(),
+        ..sequence::EngineOptions::default()
+    };
     let result = if a.sky == SkyArg::Image {
         let path = a.params.image.as_ref().ok_or_else(|| {
             crate::Error::arg("--image", "(missing)", "--sky image needs --image FILE")
@@ -46,14 +50,21 @@ pub fn run(a: InstantArgs) -> Result<()> {
             ..sequence::Report::default()
         };
         let t0 = std::time::Instant::now();
-        let mut r = sequence::instant::run_sky_cached(&scene, &sky, &q, &store, &mut report);
+        let mut r = sequence::instant::run_sky_cached(&scene, &sky, &q, &store, &opts, &mut report);
         r.report.cache = Some(store.stats());
         r.report.total_seconds = t0.elapsed().as_secs_f64();
         r
     } else {
         let spec = config::sky_spec(a.sky, &a.params)?;
-        sequence::instant::run_instant_cached(&scene, utc, local, &spec, &q, &store)?
+        sequence::instant::run_instant_with(&scene, utc, local, &spec, &q, &store, &opts)?.0
     };
+    if let Some(path) = &a.gltf {
+        if !sequence::instant::write_instant_gltf(&scene, &result, &a.time, path)? {
+            warnings(&[
+                "glTF: every surface is black, so there is no solution mesh to write".into(),
+            ]);
+        }
+    }
     sequence::write_instant(&scene, &result, &a.out)?;
     let r = &result.report;
     warnings(&r.warnings);

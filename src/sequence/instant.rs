@@ -33,6 +33,9 @@ pub struct InstantResult {
     pub sources: Vec<Source>,
     /// The report.
     pub report: Report,
+    /// Per mesh row, the direct irradiance the solve started from (RGB W/m²), when the
+    /// run asked for the mesh solution ([`EngineOptions::mesh_solution`]; else empty).
+    pub mesh_direct: Vec<crate::photometry::Rgb>,
 }
 
 impl InstantResult {
@@ -45,6 +48,7 @@ impl InstantResult {
             transport: engine.into_operator().zip(step.state),
             sources: step.sources,
             report: step.report,
+            mesh_direct: step.mesh_direct,
         }
     }
 }
@@ -52,18 +56,27 @@ impl InstantResult {
 /// Runs one instant on `scene` for the sky `sky` (already built for the instant: stages 2–7
 /// of the step), without a disk cache. `report` carries what the caller knows (sun, sky).
 pub fn run_sky(scene: &Scene, sky: &Sky, quality: &Quality, report: &mut Report) -> InstantResult {
-    run_sky_cached(scene, sky, quality, &Store::disabled(), report)
+    run_sky_cached(
+        scene,
+        sky,
+        quality,
+        &Store::disabled(),
+        &EngineOptions::default(),
+        report,
+    )
 }
 
-/// [`run_sky`] through the cache `store` (an image sky, or any sky built by the caller).
+/// [`run_sky`] through the cache `store` with the engine's options (an image sky, or any
+/// sky built by the caller).
 pub fn run_sky_cached(
     scene: &Scene,
     sky: &Sky,
     quality: &Quality,
     store: &Store,
+    opts: &EngineOptions,
     report: &mut Report,
 ) -> InstantResult {
-    let engine = Engine::new(scene, quality, store, &EngineOptions::default());
+    let engine = Engine::new(scene, quality, store, opts);
     let mut r = std::mem::take(report);
     r.warnings.extend(engine.directions().store().warnings());
     let step = engine.step_sky(sky, None, true, r, None);
@@ -114,8 +127,33 @@ pub fn run_instant_with_sky(
     quality: &Quality,
     store: &Store,
 ) -> Result<(InstantResult, Sky)> {
+    run_instant_with(
+        scene,
+        instant_utc,
+        local,
+        spec,
+        quality,
+        store,
+        &EngineOptions::default(),
+    )
+}
+
+/// [`run_instant_with_sky`] with the engine's options (`mesh_solution` for a glTF of the
+/// solution).
+///
+/// # Errors
+/// Bad time or sky parameters ([`Error::Input`]).
+pub fn run_instant_with(
+    scene: &Scene,
+    instant_utc: DateTime<Utc>,
+    local: NaiveDateTime,
+    spec: &SkySpec,
+    quality: &Quality,
+    store: &Store,
+    opts: &EngineOptions,
+) -> Result<(InstantResult, Sky)> {
     let t0 = Instant::now();
-    let engine = Engine::new(scene, quality, store, &EngineOptions::default());
+    let engine = Engine::new(scene, quality, store, opts);
     let at = StepTime {
         utc: instant_utc,
         local,
@@ -144,6 +182,28 @@ pub fn run_instant_with_sky(
     report.total_seconds = t0.elapsed().as_secs_f64();
     step.report = report;
     Ok((InstantResult::of(engine, step), sky))
+}
+
+/// Writes the instant's solution mesh to `path` as glTF binary (one frame, labelled
+/// `label`); a black scene has no mesh and writes nothing (returns false).
+///
+/// # Errors
+/// [`Error::Io`] naming the file.
+pub fn write_instant_gltf(
+    scene: &Scene,
+    result: &InstantResult,
+    label: &str,
+    path: &Path,
+) -> Result<bool> {
+    let Some((op, state)) = &result.transport else {
+        return Ok(false);
+    };
+    let lux = result.sensors.iter().map(|v| v.lux).collect();
+    let frame =
+        crate::export::gltf::frame_of(op, state, &result.mesh_direct, label.to_string(), lux);
+    let sensors: Vec<_> = scene.sensors.iter().map(|s| s.position).collect();
+    crate::export::gltf::geometry_of(scene, op).write(path, &[frame], &sensors)?;
+    Ok(true)
 }
 
 /// Writes `sensors.csv` and `report.json` into `out` (atomically, each).
