@@ -154,6 +154,24 @@ await page.waitForTimeout(100);
 const tip = await page.locator('#tip').textContent();
 check(tip === 'sensor 23: 809 lux', `hovering sensor 23 shows its frame-0 value, 809 lux: "${tip}"`);
 
+// Orbit: a drag rotates the view; walk: holding W moves the eye.
+const box = await page.locator('#gl').boundingBox();
+await page.mouse.move(box.x + 400, box.y + 200);
+await page.mouse.down();
+await page.mouse.move(box.x + 480, box.y + 230, { steps: 5 });
+await page.mouse.up();
+const orbit = await shot(page, 'orbit_drag.png');
+const dOrbit = meanAbsDiff(f0, orbit);
+check(dOrbit > 5, `an orbit drag changes the view: mean |difference| ${dOrbit.toFixed(1)}`);
+await page.locator('#walk').check();
+const walk0 = await shot(page, 'walk_start.png');
+await page.keyboard.down('KeyW');
+await page.waitForTimeout(600);
+await page.keyboard.up('KeyW');
+const walk1 = await shot(page, 'walk_forward.png');
+const dWalk = meanAbsDiff(walk0, walk1);
+check(dWalk > 2, `walking forward (W held 0.6 s) changes the view: mean |difference| ${dWalk.toFixed(1)}`);
+
 await page.waitForTimeout(2500);
 const fps = await page.evaluate(() => window.__fps);
 console.log(`fps: ${fps} (window.__fps, 800 x 600, ${renderer})`);
