@@ -63,6 +63,8 @@ pub enum Command {
     Render(Box<RenderArgs>),
     /// Assembles the output folders of `annual --shard k/n` runs into one run's files.
     Merge(MergeArgs),
+    /// Serves the `.glb` solution viewer on 127.0.0.1 and prints its URL; runs until Ctrl-C.
+    View(ViewArgs),
     /// Inspect or maintain a projection cache folder.
     Cache {
         /// What to do with the cache.
@@ -387,6 +389,16 @@ pub struct MetricArgs {
     /// ASE: hours above the threshold that make a sensor fail (≥).
     #[arg(long, default_value_t = 250.0)]
     pub ase_hours: f64,
+}
+
+/// Arguments of `daystep view`.
+#[derive(Args, Debug)]
+pub struct ViewArgs {
+    /// The solution file (glTF 2.0 binary, `.glb`).
+    pub glb: PathBuf,
+    /// Port on 127.0.0.1 (0: any free port).
+    #[arg(long, default_value_t = 8765)]
+    pub port: u16,
 }
 
 /// The cache folder argument of `daystep cache …`.

@@ -5,7 +5,7 @@
 //!   metric thresholds, dates, shard, knobs), every refusal an [`crate::Error::Input`] naming the
 //!   flag and the value;
 //! - one short module per command ([`instant`], [`df`], [`convergence`], [`annual`],
-//!   [`render`], [`merge`], [`cache`]) that calls the library and reports on the terminal; the work
+//!   [`render`], [`merge`], [`view`], [`cache`]) that calls the library and reports on the terminal; the work
 //!   itself (choosing a weather record, checking sites, writing outputs) is in the
 //!   library, so a Rust caller gets it too;
 //! - `messages`: terminal output that never panics on a closed pipe;
@@ -24,6 +24,7 @@ pub mod df;
 pub mod instant;
 pub mod merge;
 pub mod render;
+pub mod view;
 pub(crate) mod messages;
 
 pub use args::{Cli, Command};
@@ -43,6 +44,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Annual(a) => annual::run(a),
         Command::Render(a) => render::run(*a),
         Command::Merge(a) => merge::run(a),
+        Command::View(a) => view::run(a),
         Command::Cache { action } => cache::run(action),
     }
 }

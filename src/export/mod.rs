@@ -1,6 +1,6 @@
 //! L7 time-series and metric outputs: `illuminance.csv` (write, stream with checkpoints,
 //! read, merge shards), Radiance/DAYSIM-style `.ill`, `metrics.csv`, `summary.json` and
-//! `surfaces.csv`.
+//! `surfaces.csv`; [`viewer`] serves the `.glb` solution viewer (`daystep view`).
 //!
 //! Every number is written with a fixed format (three decimals, −0 written as 0) and every
 //! time as `YYYY-MM-DDTHH:MM:SS` local standard time (the time at which the sun was
@@ -12,6 +12,7 @@
 
 pub mod gltf;
 pub mod plot;
+pub mod viewer;
 
 use crate::error::{Error, Result};
 use crate::files;
