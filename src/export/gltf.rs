@@ -3,8 +3,9 @@
 //!
 //! Layout (what `daystep view` reads):
 //! - one node and one mesh, one primitive per material; glTF's Y-up frame, metres:
-//!   (x, y, z)_glTF = (east, up, −north) of the scene frame (origin-subtracted; the
-//!   origin is in `asset.extras.daystep.origin`);
+//!   (x, y, z)_glTF = (east, up, −north) of the scene frame, the vertices relative to the
+//!   scene's origin and the node's translation the origin (also in
+//!   `asset.extras.daystep.origin`, in full precision);
 //! - vertices are the mesh elements' corners welded on each plane of each material, each
 //!   carrying the area-weighted mean of the elements around it (so flat surfaces shade
 //!   smoothly and share their vertices);
@@ -334,9 +335,12 @@ impl SolutionGeometry {
             primitives,
             weights: None,
         });
+        // The vertices are relative to the scene's origin (f32 keeps millimetres there);
+        // the node's translation puts them back in the model's frame.
         let node = root.push(json::Node {
             mesh: Some(mesh),
             name: Some("solution".into()),
+            translation: Some(to_gltf(self.origin)),
             ..Default::default()
         });
         root.push(json::Scene {

@@ -3,7 +3,7 @@
 # Not part of `cargo test` or CI: it installs Debian's chromium (apt-get, when
 # /usr/bin/chromium is missing) and npm playwright-core into tests/browser/node_modules.
 #
-#     tests/browser/run.sh [--glb FILE.glb]
+#     tests/browser/run.sh [--glb FILE.glb [--frame K]]   (K: the frame the checks start from)
 #
 # Without --glb it writes the test room (make_test_glb.py). With --glb it checks FILE against
 # the layout and runs the same assertions, which assume a room with its window at the
@@ -17,7 +17,8 @@ glb=""
 while [[ $# -gt 0 ]]; do
     case "$1" in
         --glb) glb="$(realpath "$2")"; shift 2 ;;
-        *) echo "usage: $0 [--glb FILE.glb]" >&2; exit 2 ;;
+        --frame) export BASE_FRAME="$2"; shift 2 ;;
+        *) echo "usage: $0 [--glb FILE.glb [--frame K]]" >&2; exit 2 ;;
     esac
 done
 mkdir -p "$out"
