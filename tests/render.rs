@@ -481,3 +481,22 @@ fn the_gltf_holds_every_frame_and_a_plane_reads_its_closed_form() {
         );
     }
 }
+
+/// `annual --gltf` for a chosen day: one frame per lit step, a file the gltf crate reads.
+#[test]
+fn a_days_gltf_has_one_frame_per_lit_step() {
+    use daystep::sequence::render::{plan_weather, write_days_gltf};
+    let scene = Scene::load(&office()).unwrap();
+    let weather = daystep::weather::read_weather(&office().with_file_name("weather.epw")).unwrap();
+    let day = weather.same_day_in_file_year(chrono::NaiveDate::from_ymd_opt(2021, 3, 21).unwrap());
+    let lit = plan_weather(&scene, &weather, Some(day), Some(day)).0.len();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("day.glb");
+    let q = Quality::preset("draft").unwrap();
+    let n = write_days_gltf(&scene, &weather, &q, &Store::disabled(), &[day], &path).unwrap();
+    assert_eq!(n, lit);
+    let g = gltf::Gltf::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    let extras: serde_json::Value =
+        serde_json::from_str(g.document.as_json().asset.extras.as_ref().unwrap().get()).unwrap();
+    assert_eq!(extras["daystep"]["frames"].as_array().unwrap().len(), lit);
+}

@@ -97,6 +97,16 @@ pub fn run(a: AnnualArgs) -> Result<()> {
         );
         return Err(Error::Interrupted);
     }
+    if let Some(path) = &a.gltf {
+        let days = a
+            .gltf_day
+            .iter()
+            .map(|d| config::date("--gltf-day", d).map(|d| weather.same_day_in_file_year(d)))
+            .collect::<Result<Vec<_>>>()?;
+        let n =
+            crate::sequence::render::write_days_gltf(&scene, &weather, &q, &store, &days, path)?;
+        note!("daystep annual: wrote {} ({n} frames)", path.display());
+    }
     note!(
         "daystep annual: {} steps ({} computed, {} resumed; {} night, {} missing skipped), {} directions built, {} from cache, {:.1} s; median stated error {:.2} %; wrote {}",
         r.steps,

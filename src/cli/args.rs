@@ -357,6 +357,13 @@ pub struct AnnualArgs {
     /// Seed of the Monte Carlo parts (results are a pure function of it).
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Also write the solution mesh of the --gltf-day days (every lit step a frame) as
+    /// glTF binary.
+    #[arg(long, requires = "gltf_day")]
+    pub gltf: Option<PathBuf>,
+    /// A day for --gltf, YYYY-MM-DD (repeat for several).
+    #[arg(long, requires = "gltf")]
+    pub gltf_day: Vec<String>,
     /// Metric thresholds.
     #[command(flatten)]
     pub metrics: MetricArgs,

@@ -674,3 +674,67 @@ fn decode_rgba(path: &Path, bytes: &[u8]) -> Result<(usize, usize, Vec<u8>)> {
     };
     Ok((w, h, px))
 }
+
+/// The solution mesh of `days` of `weather` as glTF binary at `path`: every lit step of
+/// those days solved forward (warm-started within each day) and written as one frame
+/// (what `annual --gltf` writes beside its tables). Returns the frames written.
+///
+/// # Errors
+/// Bad weather values, an unwritable file; a black scene has no mesh (an input error
+/// naming `path`).
+pub fn write_days_gltf(
+    scene: &Scene,
+    weather: &Weather,
+    quality: &Quality,
+    store: &Store,
+    days: &[NaiveDate],
+    path: &Path,
+) -> Result<usize> {
+    let engine = Engine::new(
+        scene,
+        quality,
+        store,
+        &EngineOptions {
+            mesh_solution: true,
+            ..EngineOptions::default()
+        },
+    );
+    let Some(op) = engine.operator() else {
+        return Err(Error::input(
+            path,
+            None,
+            None,
+            "glTF: every surface is black, so there is no solution mesh to write",
+        ));
+    };
+    let mut frames = Vec::new();
+    for &d in days {
+        let (plans, _, _) = plan_weather(scene, weather, Some(d), Some(d));
+        let mut state = None;
+        for p in plans {
+            let step = engine.step(&p.at, &p.spec, state.as_ref(), false)?;
+            if let Some(st) = &step.state {
+                let lux = step.sensors.iter().map(|v| v.lux).collect();
+                frames.push(crate::export::gltf::frame_of(
+                    op,
+                    st,
+                    &step.mesh_direct,
+                    p.label.clone(),
+                    lux,
+                ));
+            }
+            state = step.state;
+        }
+    }
+    if frames.is_empty() {
+        return Err(Error::input(
+            path,
+            None,
+            None,
+            "glTF: the chosen days have no lit step in the weather file",
+        ));
+    }
+    let sensors: Vec<_> = scene.sensors.iter().map(|s| s.position).collect();
+    crate::export::gltf::geometry_of(scene, op).write(path, &frames, &sensors)?;
+    Ok(frames.len())
+}
