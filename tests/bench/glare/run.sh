@@ -18,16 +18,7 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../../.." && pwd)"
 cd "$root"
 
-venv="${RADIANCE_VENV:-$root/target/radiance-venv}"
-if [[ ! -x "$venv/bin/python" ]]; then
-    echo "making $venv" >&2
-    python3 -m venv "$venv"
-fi
-if ! "$venv/bin/python" -c "import pyradiance" 2>/dev/null; then
-    echo "installing pyradiance into $venv (download from PyPI)" >&2
-    "$venv/bin/python" -m pip install --quiet --upgrade pip
-    "$venv/bin/python" -m pip install --quiet "pyradiance>=1.3"
-fi
+source "$root/tests/bench/radiance/venv.sh"
 
 # The wheel's binaries and their lib folder, as validate.py sets them.
 base="$("$venv/bin/python" -c 'import pathlib, pyradiance; print(pathlib.Path(pyradiance.__file__).resolve().parent)')"

@@ -11,13 +11,6 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../../.." && pwd)"
 cd "$root"
-venv="$root/target/radiance-venv"
-if [[ ! -x "$venv/bin/python" ]]; then
-    python3 -m venv "$venv"
-fi
-if ! "$venv/bin/python" -c "import pyradiance" 2>/dev/null; then
-    "$venv/bin/python" -m pip install --quiet --upgrade pip
-    "$venv/bin/python" -m pip install --quiet "pyradiance>=1.3"
-fi
+source "$root/tests/bench/radiance/venv.sh"
 cargo build --release --quiet
 exec "$venv/bin/python" "$here/rpict.py" --daystep "$root/target/release/daystep" "$@"
