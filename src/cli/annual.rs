@@ -38,6 +38,14 @@ pub(super) fn progress_bar(unit: &str) -> Option<indicatif::ProgressBar> {
     })
 }
 
+/// Moves `bar` (when there is one) to `done` of `total`.
+pub(super) fn show_progress(bar: Option<&indicatif::ProgressBar>, done: usize, total: usize) {
+    if let Some(b) = bar {
+        b.set_length(total as u64);
+        b.set_position(done as u64);
+    }
+}
+
 /// Runs `daystep annual` into `--out`; a rerun with the same folder continues.
 ///
 /// # Errors
@@ -72,12 +80,7 @@ pub fn run(a: AnnualArgs) -> Result<()> {
     let store = config::store(&a.cache, a.no_cache);
     let stop = stop_on_ctrl_c();
     let bar = progress_bar("steps");
-    let progress = |done: usize, total: usize| {
-        if let Some(b) = &bar {
-            b.set_length(total as u64);
-            b.set_position(done as u64);
-        }
-    };
+    let progress = |done: usize, total: usize| show_progress(bar.as_ref(), done, total);
     let control = RunControl {
         stop: &stop,
         progress: &progress,

@@ -144,12 +144,8 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let store = config::store(&a.run.cache, a.run.no_cache);
     let stop = super::annual::stop_on_ctrl_c();
     let bar = super::annual::progress_bar("frames");
-    let progress = |done: usize, total: usize| {
-        if let Some(b) = &bar {
-            b.set_length(total as u64);
-            b.set_position(done as u64);
-        }
-    };
+    let progress =
+        |done: usize, total: usize| super::annual::show_progress(bar.as_ref(), done, total);
     let control = RunControl {
         stop: &stop,
         progress: &progress,
