@@ -61,6 +61,19 @@ pub struct Renderer<'a> {
     pub geometry_from_cache: bool,
 }
 
+/// An engine whose steps keep their mesh solution (renders and glTF frames).
+fn mesh_engine<'a>(scene: &'a Scene, quality: &Quality, store: &'a Store) -> Engine<'a> {
+    Engine::new(
+        scene,
+        quality,
+        store,
+        &EngineOptions {
+            mesh_solution: true,
+            ..EngineOptions::default()
+        },
+    )
+}
+
 /// Version of the camera geometry records: bump when what they hold changes.
 const VIEW_VERSION: u32 = 1;
 
@@ -114,15 +127,7 @@ impl<'a> Renderer<'a> {
     /// Prepares the engine (the operator, read from or written to `store`) and traces the
     /// camera.
     pub fn new(scene: &'a Scene, quality: &Quality, store: &'a Store, camera: &Camera) -> Self {
-        let engine = Engine::new(
-            scene,
-            quality,
-            store,
-            &EngineOptions {
-                mesh_solution: true,
-                ..EngineOptions::default()
-            },
-        );
+        let engine = mesh_engine(scene, quality, store);
         let t0 = Instant::now();
         let view = camera.scene_view(scene);
         let mesh = engine.operator().map(|t| &t.mesh);
@@ -690,15 +695,7 @@ pub fn write_days_gltf(
     days: &[NaiveDate],
     path: &Path,
 ) -> Result<usize> {
-    let engine = Engine::new(
-        scene,
-        quality,
-        store,
-        &EngineOptions {
-            mesh_solution: true,
-            ..EngineOptions::default()
-        },
-    );
+    let engine = mesh_engine(scene, quality, store);
     let Some(op) = engine.operator() else {
         return Err(Error::input(
             path,
