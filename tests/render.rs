@@ -500,3 +500,51 @@ fn a_days_gltf_has_one_frame_per_lit_step() {
         serde_json::from_str(g.document.as_json().asset.extras.as_ref().unwrap().get()).unwrap();
     assert_eq!(extras["daystep"]["frames"].as_array().unwrap().len(), lit);
 }
+
+/// A render under an image sky: a uniform image of radiance L over a plane of ρ reads ρL
+/// in every pixel (the EXR daystep wrote, read back).
+#[test]
+fn a_render_under_a_uniform_image_sky_reads_rho_l() {
+    use daystep::sequence::annual::RunControl;
+    use daystep::sequence::render::{run_render, FramePlan, RenderOutputs};
+    use daystep::sequence::{SkySpec, StepTime};
+    use daystep::sky::image::{ImageSky, Mapping};
+    use std::sync::atomic::AtomicBool;
+    let (rho, l) = (0.4, 12.0);
+    let scene = plane(rho);
+    let image = ImageSky::new(64, 32, vec![Rgb::splat(l); 64 * 32], Mapping::Equirect, 0.0);
+    let (utc, local) = daystep::site::parse_time("2024-03-21T12:00", 0.0).unwrap();
+    let mut plan = FramePlan::new(StepTime { utc, local }, SkySpec::None);
+    plan.sky = Some(std::sync::Arc::new(sky_of(
+        Some(Box::new(image)),
+        None,
+        0.0,
+    )));
+    let dir = tempfile::tempdir().unwrap();
+    let camera = Camera {
+        view: view("-vtv -vp 0 0 3 -vd 0.3 0 -1 -vu 0 1 0 -vh 60 -vv 45"),
+        options: small(Quantity::Radiance),
+    };
+    let stop = AtomicBool::new(false);
+    let control = RunControl {
+        stop: &stop,
+        progress: &|_, _| {},
+    };
+    let outputs = RenderOutputs::default();
+    let q = Quality::preset("draft").unwrap();
+    run_render(
+        &scene,
+        &q,
+        &Store::disabled(),
+        &camera,
+        &[plan.clone()],
+        dir.path(),
+        &outputs,
+        &control,
+    )
+    .unwrap();
+    let img =
+        daystep::render::exr::read_exr(&dir.path().join(format!("{}.exr", plan.name))).unwrap();
+    // The EXR holds f32: 1 % as the closed-form tolerance, f32 far below it.
+    assert!(all_close(&img, rho * l, 0.01) > 100);
+}

@@ -28,7 +28,7 @@ pub enum SkyArg {
     /// Preetham clear sky with sun (--turbidity).
     Preetham,
     /// An HDR image (--image FILE.exr|.hdr, --mapping equirect|angular, --rotate DEG;
-    /// with --dni its saturated pixels become the sun). `instant` only.
+    /// with --dni its saturated pixels become the sun). `instant` and `render --time`.
     Image,
     /// No daylight.
     None,

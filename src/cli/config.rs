@@ -66,7 +66,7 @@ pub fn sky_spec(sky: SkyArg, p: &SkyParams) -> Result<SkySpec> {
             return Err(Error::arg(
                 "--sky",
                 "image",
-                "image skies are read by `daystep instant` only, so far",
+                "image skies are read by `instant` and `render --time` only, so far",
             ))
         }
     })

@@ -202,16 +202,28 @@ impl<'a> Renderer<'a> {
 }
 
 /// One frame to render: when, under which sky, and its name.
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct FramePlan {
     /// The instant.
     pub at: StepTime,
-    /// The sky.
+    /// The sky's parameters (unused when `sky` is given).
     pub spec: SkySpec,
+    /// A sky built by the caller (an image sky), used instead of `spec`.
+    pub sky: Option<std::sync::Arc<Sky>>,
     /// Local standard time, `YYYY-MM-DDTHH:MM` (labels, frames.csv).
     pub label: String,
     /// File stem, by local time: `YYYYMMDD_HHMM`.
     pub name: String,
+}
+
+impl std::fmt::Debug for FramePlan {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FramePlan")
+            .field("label", &self.label)
+            .field("spec", &self.spec)
+            .field("sky", &self.sky.as_ref().map(|s| s.description.clone()))
+            .finish()
+    }
 }
 
 impl FramePlan {
@@ -222,6 +234,7 @@ impl FramePlan {
             name: at.local.format("%Y%m%d_%H%M").to_string(),
             at,
             spec,
+            sky: None,
         }
     }
 }
@@ -489,7 +502,16 @@ pub fn run_render(
         }
         let renderer = renderer.as_ref().expect("made when frames remain");
         let t = Instant::now();
-        let mut frame = renderer.frame(&plan.at, &plan.spec)?;
+        let mut frame = match &plan.sky {
+            Some(sky) => {
+                let report = Report {
+                    sky: sky.description.clone(),
+                    ..Report::default()
+                };
+                renderer.frame_sky(sky, report)
+            }
+            None => renderer.frame(&plan.at, &plan.spec)?,
+        };
         step_s.push(frame.step.report.stage_seconds.total());
         gather_s.push(frame.gather_seconds);
         for w in &frame.step.report.warnings {
