@@ -15,6 +15,11 @@ use crate::sky::image::Mapping;
 /// Bad arguments or scene ([`crate::Error::Input`]), unwritable output.
 pub fn run(a: InstantArgs) -> Result<()> {
     let q = config::quality(&a.run.quality, a.run.seed)?;
+    // The sky's flags are checked before the scene is read (an image sky reads its file
+    // once the scene's ground reflectance is known).
+    let spec = (a.sky != SkyArg::Image)
+        .then(|| config::sky_spec(a.sky, &a.params))
+        .transpose()?;
     let scene = Scene::load(&a.scene)?;
     warnings(&scene.warnings);
     let (utc, local) = crate::site::parse_time(&a.time, scene.site.utc_offset_h)?;
@@ -55,7 +60,7 @@ pub fn run(a: InstantArgs) -> Result<()> {
         r.report.total_seconds = t0.elapsed().as_secs_f64();
         r
     } else {
-        let spec = config::sky_spec(a.sky, &a.params)?;
+        let spec = spec.expect("checked above for every sky but an image");
         sequence::instant::run_instant_with(&scene, utc, local, &spec, &q, &store, &opts)?.0
     };
     if let Some(path) = &a.gltf {
