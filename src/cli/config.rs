@@ -72,6 +72,24 @@ pub fn sky_spec(sky: SkyArg, p: &SkyParams) -> Result<SkySpec> {
     })
 }
 
+/// The image sky of `--sky image` (`--image`, `--mapping`, `--rotate`, `--dni`) over a
+/// ground of reflectance `ground_reflectance`.
+///
+/// # Errors
+/// A missing `--image`, and every error of [`crate::sequence::sky::image_sky`].
+pub fn image_sky(p: &SkyParams, ground_reflectance: f64) -> Result<crate::sky::Sky> {
+    use crate::sky::image::Mapping;
+    let path = p
+        .image
+        .as_ref()
+        .ok_or_else(|| Error::arg("--image", "(missing)", "--sky image needs --image FILE"))?;
+    let mapping = match p.mapping {
+        super::args::MappingArg::Equirect => Mapping::Equirect,
+        super::args::MappingArg::Angular => Mapping::Angular,
+    };
+    crate::sequence::sky::image_sky(path, mapping, p.rotate, p.dni, ground_reflectance)
+}
+
 /// The projection cache of a run: `dir` (`--cache`) at the default size limit, or none
 /// with `--no-cache`.
 pub fn store(dir: &Path, no_cache: bool) -> Store {

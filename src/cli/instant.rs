@@ -1,12 +1,11 @@
 //! `daystep instant`: one instant's illuminance at every sensor.
 
-use super::args::{InstantArgs, MappingArg, SkyArg};
+use super::args::{InstantArgs, SkyArg};
 use super::config;
 use super::messages::{note, warnings};
 use crate::error::Result;
 use crate::scene::Scene;
 use crate::sequence;
-use crate::sky::image::Mapping;
 
 /// Runs `daystep instant`: writes `sensors.csv` and `report.json` into `--out` and
 /// summarises the run on standard error.
@@ -29,20 +28,7 @@ pub fn run(a: InstantArgs) -> Result<()> {
         ..sequence::EngineOptions::default()
     };
     let result = if a.sky == SkyArg::Image {
-        let path = a.params.image.as_ref().ok_or_else(|| {
-            crate::Error::arg("--image", "(missing)", "--sky image needs --image FILE")
-        })?;
-        let mapping = match a.params.mapping {
-            MappingArg::Equirect => Mapping::Equirect,
-            MappingArg::Angular => Mapping::Angular,
-        };
-        let sky = sequence::sky::image_sky(
-            path,
-            mapping,
-            a.params.rotate,
-            a.params.dni,
-            scene.ground_reflectance,
-        )?;
+        let sky = config::image_sky(&a.params, scene.ground_reflectance)?;
         let mut report = sequence::Report {
             version: env!("CARGO_PKG_VERSION").into(),
             command: "instant".into(),

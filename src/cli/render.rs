@@ -1,6 +1,6 @@
 //! `daystep render`: images from the solution, one instant or a weather file's sequence.
 
-use super::args::{MappingArg, RenderArgs, SkyArg};
+use super::args::{RenderArgs, SkyArg};
 use super::config;
 use super::messages::{note, warnings};
 use crate::error::{Error, Result};
@@ -111,20 +111,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
                 .ok_or_else(|| Error::arg("--sky", "", "--time needs --sky"))?;
             let (utc, local) = crate::site::parse_time(t, scene.site.utc_offset_h)?;
             if sky == SkyArg::Image {
-                let path = a.params.image.as_ref().ok_or_else(|| {
-                    Error::arg("--image", "(missing)", "--sky image needs --image FILE")
-                })?;
-                let mapping = match a.params.mapping {
-                    MappingArg::Equirect => crate::sky::image::Mapping::Equirect,
-                    MappingArg::Angular => crate::sky::image::Mapping::Angular,
-                };
-                let built = crate::sequence::sky::image_sky(
-                    path,
-                    mapping,
-                    a.params.rotate,
-                    a.params.dni,
-                    scene.ground_reflectance,
-                )?;
+                let built = config::image_sky(&a.params, scene.ground_reflectance)?;
                 let mut plan =
                     FramePlan::new(StepTime { utc, local }, crate::sequence::SkySpec::None);
                 plan.sky = Some(std::sync::Arc::new(built));

@@ -557,12 +557,18 @@ enum Kind {
     Day { sun: bool },
 }
 
+/// Night: no diffuse light, and no beam or no sun above the horizon (every sequence
+/// over a weather file skips such records).
+pub(super) fn is_night(r: &WeatherRecord, sun_altitude_deg: f64) -> bool {
+    r.dhi <= 0.0 && (r.dni <= 0.0 || sun_altitude_deg <= 0.0)
+}
+
 fn classify(scene: &Scene, s: &Planned) -> Kind {
     if s.record.missing {
         return Kind::Missing;
     }
     let sun = solar_position(s.record.utc(&scene.site), &scene.site);
-    if s.record.dhi <= 0.0 && (s.record.dni <= 0.0 || sun.altitude_deg() <= 0.0) {
+    if is_night(s.record, sun.altitude_deg()) {
         return Kind::Night;
     }
     Kind::Day {
@@ -577,7 +583,8 @@ fn step_time(scene: &Scene, s: &Planned) -> StepTime {
     }
 }
 
-fn perez(r: &WeatherRecord) -> SkySpec {
+/// The Perez sky of a weather record.
+pub(super) fn perez(r: &WeatherRecord) -> SkySpec {
     SkySpec::Perez {
         dni: r.dni,
         dhi: r.dhi,

@@ -260,15 +260,11 @@ pub fn plan_weather(
         }
         let utc = r.utc(&scene.site);
         let sun = solar_position(utc, &scene.site);
-        if r.dhi <= 0.0 && (r.dni <= 0.0 || sun.altitude_deg() <= 0.0) {
+        if super::annual::is_night(r, sun.altitude_deg()) {
             night += 1;
             continue;
         }
-        let spec = SkySpec::Perez {
-            dni: r.dni,
-            dhi: r.dhi,
-            dew_point_c: r.dew_point_c,
-        };
+        let spec = super::annual::perez(r);
         frames.push(FramePlan::new(StepTime { utc, local: r.time }, spec));
     }
     (frames, night, missing)
