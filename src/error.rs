@@ -79,12 +79,22 @@ impl Error {
     /// Process exit code for this error: 1 for bad input (including a missing or unreadable
     /// file), 2 otherwise.
     pub fn exit_code(&self) -> i32 {
-        use std::io::ErrorKind::{NotFound, PermissionDenied};
+        use std::io::ErrorKind::{
+            IsADirectory, NotADirectory, NotFound, PermissionDenied, ReadOnlyFilesystem,
+        };
         match self {
             Error::Input { .. } => 1,
             Error::Interrupted => 130,
-            // A file the user named that is missing or unreadable is bad input too.
-            Error::Io { source, .. } if matches!(source.kind(), NotFound | PermissionDenied) => 1,
+            // A file the user named that is missing, unreadable, or a folder where a file
+            // belongs (or the reverse) is bad input too.
+            Error::Io { source, .. }
+                if matches!(
+                    source.kind(),
+                    NotFound | PermissionDenied | IsADirectory | NotADirectory | ReadOnlyFilesystem
+                ) =>
+            {
+                1
+            }
             _ => 2,
         }
     }

@@ -50,6 +50,59 @@ pub fn read_text(path: &Path) -> Result<String> {
     })
 }
 
+/// Checks, before any work, that the output folder `dir` given by flag `flag` can take new
+/// files: creates it (and its parents) when missing, then writes and removes a probe
+/// file. A run that would fail on its first write fails here instead, with nothing
+/// computed and nothing left behind but the (empty) folder.
+///
+/// # Errors
+/// [`Error::Input`] naming the flag and the path (exit 1): the path is a file, a parent
+/// is not a folder, or the folder cannot be created or written.
+pub fn check_output_dir(flag: &str, dir: &Path) -> Result<()> {
+    let refuse = |why: String| Error::arg(flag, dir.display(), why);
+    if dir.exists() && !dir.is_dir() {
+        return Err(refuse("exists and is not a folder".into()));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| refuse(format!("cannot create the folder: {e}")))?;
+    probe(dir).map_err(|e| refuse(format!("cannot write in the folder: {e}")))
+}
+
+/// Checks, before any work, that the output file `path` given by flag `flag` can be
+/// written: it is not a folder, and its folder exists (or can be created) and takes new
+/// files. The file itself is not touched, so an existing one is only replaced by the run.
+///
+/// # Errors
+/// [`Error::Input`] naming the flag and the path (exit 1).
+pub fn check_output_file(flag: &str, path: &Path) -> Result<()> {
+    let refuse = |why: String| Error::arg(flag, path.display(), why);
+    if path.is_dir() {
+        return Err(refuse(
+            "is a folder; give a file name (e.g. solution.glb)".into(),
+        ));
+    }
+    if path.file_name().is_none() {
+        return Err(refuse("is not a file name".into()));
+    }
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if dir.exists() && !dir.is_dir() {
+        return Err(refuse(format!("{} is not a folder", dir.display())));
+    }
+    std::fs::create_dir_all(dir)
+        .map_err(|e| refuse(format!("cannot create its folder {}: {e}", dir.display())))?;
+    probe(dir).map_err(|e| refuse(format!("cannot write in {}: {e}", dir.display())))
+}
+
+/// Writes and removes a small file in `dir`: the only portable test of write permission
+/// (mode bits say nothing about read-only mounts, ACLs or root).
+fn probe(dir: &Path) -> std::io::Result<()> {
+    let p = dir.join(format!(".daystep-probe.{}", std::process::id()));
+    std::fs::File::create(&p)?.write_all(b"probe")?;
+    std::fs::remove_file(&p)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -66,5 +119,33 @@ mod tests {
             .map(|e| e.unwrap().file_name())
             .collect();
         assert_eq!(names.len(), 1, "{names:?}");
+    }
+
+    #[test]
+    fn output_checks_refuse_folders_and_files_in_the_way_naming_the_flag() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("a.txt");
+        std::fs::write(&file, b"x").unwrap();
+        // A folder where a file is wanted, a file where a folder is wanted, a file as parent.
+        for e in [
+            check_output_file("--gltf", dir.path()).unwrap_err(),
+            check_output_dir("--out", &file).unwrap_err(),
+            check_output_file("--gltf", &file.join("x.glb")).unwrap_err(),
+            check_output_dir("--out", &file.join("sub")).unwrap_err(),
+        ] {
+            assert_eq!(e.exit_code(), 1, "{e}");
+            let (shown, path, _, _) = crate::error::input_parts(e);
+            assert!(
+                path.to_string_lossy().starts_with("<argument --"),
+                "{shown}"
+            );
+        }
+        // What is fine passes and leaves no probe behind.
+        check_output_dir("--out", &dir.path().join("new/out")).unwrap();
+        check_output_file("--gltf", &dir.path().join("g/x.glb")).unwrap();
+        check_output_file("--gltf", &file).unwrap();
+        assert_eq!(std::fs::read(&file).unwrap(), b"x");
+        let left: Vec<_> = std::fs::read_dir(dir.path().join("g")).unwrap().collect();
+        assert!(left.is_empty());
     }
 }

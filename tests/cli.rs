@@ -309,7 +309,10 @@ fn render_writes_its_files_and_refuses_bad_cameras_naming_the_flag() {
     }
     let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
     let row: Vec<&str> = csv.lines().nth(1).unwrap().split(',').collect();
-    let dgp: f64 = row[row.len() - 3].parse().unwrap();
+    // Count from the right: the quoted sky column may hold commas.
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let from_right = header.len() - header.iter().position(|c| *c == "dgp").unwrap();
+    let dgp: f64 = row[row.len() - from_right].parse().unwrap();
     assert!((0.0..=1.0).contains(&dgp), "dgp {dgp}");
     // Glare of a perspective view, no camera at all, a view value that is not a number.
     for (extra, flag) in [

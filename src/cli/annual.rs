@@ -76,6 +76,7 @@ pub fn run(a: AnnualArgs) -> Result<()> {
         ..AnnualOptions::default()
     };
     opts.metrics.validate()?;
+    super::check_outputs(&a.out, a.gltf.as_deref())?;
     warnings(&weather.warnings);
     let store = config::store(&a.cache, a.no_cache);
     let stop = stop_on_ctrl_c();

@@ -74,6 +74,7 @@ pub fn run(a: ConvergenceArgs) -> Result<()> {
     let (utc, local, spec, what) = instant(&a, &scene)?;
     note!("daystep convergence: {what}");
     let ladders = config::knobs(convergence::ladders(&base), a.knobs.as_deref())?;
+    super::check_outputs(&a.out, None)?;
     let show = |done: usize, total: usize, knob: &str, setting: &str| {
         if !knob.is_empty() {
             note!("  [{:>2}/{total}] {knob}: {setting}", done + 1);

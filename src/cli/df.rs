@@ -16,6 +16,7 @@ pub fn run(a: DfArgs) -> Result<()> {
     let q = config::quality(&a.run.quality, a.run.seed)?;
     let scene = Scene::load(&a.scene)?;
     warnings(&scene.warnings);
+    super::check_outputs(&a.out, None)?;
     let store = config::store(&a.run.cache, a.run.no_cache);
     let result = sequence::df::run_df(&scene, &q, &store)?;
     sequence::df::write_df(&scene, &result, &a.out)?;

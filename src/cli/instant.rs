@@ -22,6 +22,7 @@ pub fn run(a: InstantArgs) -> Result<()> {
     let scene = Scene::load(&a.scene)?;
     warnings(&scene.warnings);
     let (utc, local) = crate::site::parse_time(&a.time, scene.site.utc_offset_h)?;
+    super::check_outputs(&a.out, a.gltf.as_deref())?;
     let store = config::store(&a.run.cache, a.run.no_cache);
     let opts = sequence::EngineOptions {
         mesh_solution: a.gltf.is_some(),

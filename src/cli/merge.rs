@@ -12,6 +12,7 @@ use crate::error::Result;
 /// unwritable output.
 pub fn run(a: MergeArgs) -> Result<()> {
     let params = config::metric_params(&a.metrics);
+    super::check_outputs(&a.out, None)?;
     crate::sequence::annual::merge(&a.parts, &a.out, a.step, &params)?;
     note!(
         "daystep merge: {} shards → {}",

@@ -49,6 +49,16 @@ pub fn run(cli: Cli) -> Result<()> {
     }
 }
 
+/// Checks the output folder `--out` and the optional `--gltf` file before any work, so a
+/// path that cannot be written ends the run at once with exit 1 naming the flag.
+fn check_outputs(out: &std::path::Path, gltf: Option<&std::path::Path>) -> Result<()> {
+    crate::files::check_output_dir("--out", out)?;
+    if let Some(g) = gltf {
+        crate::files::check_output_file("--gltf", g)?;
+    }
+    Ok(())
+}
+
 /// The exit code of a finished [`run`] (see the module doc); a broken pipe on standard
 /// output is success, and nothing is printed for it.
 fn exit_code(result: Result<()>) -> i32 {

@@ -115,6 +115,16 @@ pub fn run(a: RenderArgs) -> Result<()> {
                 let mut plan =
                     FramePlan::new(StepTime { utc, local }, crate::sequence::SkySpec::None);
                 plan.sky = Some(std::sync::Arc::new(built));
+                // The image's content, not its name, decides whether a frame can resume.
+                let image = a.params.image.as_deref().unwrap_or(Path::new(""));
+                let bytes = std::fs::read(image).map_err(|e| Error::io(image, e))?;
+                plan.sky_inputs = format!(
+                    "image {} {:?} {:?} {:?}",
+                    blake3::hash(&bytes).to_hex(),
+                    a.params.mapping,
+                    a.params.rotate,
+                    a.params.dni
+                );
                 vec![plan]
             } else {
                 let spec = config::sky_spec(sky, &a.params)?;
@@ -149,6 +159,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         }),
         command: std::env::args().collect::<Vec<_>>().join(" "),
     };
+    super::check_outputs(&a.out, a.gltf.as_deref())?;
     let store = config::store(&a.run.cache, a.run.no_cache);
     let stop = super::annual::stop_on_ctrl_c();
     let bar = super::annual::progress_bar("frames");

@@ -210,6 +210,9 @@ pub struct FramePlan {
     pub spec: SkySpec,
     /// A sky built by the caller (an image sky), used instead of `spec`.
     pub sky: Option<std::sync::Arc<Sky>>,
+    /// What determines `sky` when it is given (e.g. the image file's content hash, its
+    /// mapping and rotation): part of the frame's resume fingerprint.
+    pub sky_inputs: String,
     /// Local standard time, `YYYY-MM-DDTHH:MM` (labels, frames.csv).
     pub label: String,
     /// File stem, by local time: `YYYYMMDD_HHMM`.
@@ -235,6 +238,7 @@ impl FramePlan {
             at,
             spec,
             sky: None,
+            sky_inputs: String::new(),
         }
     }
 }
@@ -291,14 +295,21 @@ pub struct FrameRow {
     pub ev_lux: f64,
     /// Wall time of the frame (step + gather + files), s.
     pub seconds: f64,
+    /// Fingerprint of everything that determined the frame's files
+    /// ([`frame_fingerprint`]): a rerun resumes the frame only when it is unchanged.
+    pub inputs: String,
 }
 
-const FRAMES_HEADER: &str = "frame,time_local,time_utc,sky,mean,mean_err,dgp,ev_lux,seconds";
+const FRAMES_HEADER: &str = "frame,time_local,time_utc,sky,mean,mean_err,dgp,ev_lux,inputs,seconds";
+
+/// The header of `frames.csv` before frames carried their inputs' fingerprint: such rows
+/// are never resumed, since what made them is unknown.
+const FRAMES_HEADER_V1: &str = "frame,time_local,time_utc,sky,mean,mean_err,dgp,ev_lux,seconds";
 
 impl FrameRow {
     fn csv(&self) -> String {
         format!(
-            "{},{},{},\"{}\",{:.6},{:.6},{:.4},{:.3},{:.3}",
+            "{},{},{},\"{}\",{:.6},{:.6},{:.4},{:.3},{},{:.3}",
             self.name,
             self.time_local,
             self.time_utc,
@@ -307,34 +318,105 @@ impl FrameRow {
             self.mean_err,
             self.dgp,
             self.ev_lux,
+            self.inputs,
             self.seconds
         )
     }
 }
 
+/// A frame a previous run of the folder finished, as `frames.csv` lists it.
+struct Finished {
+    /// File stem.
+    name: String,
+    /// Its inputs' fingerprint (empty for rows written before fingerprints).
+    inputs: String,
+    /// The whole row.
+    line: String,
+}
+
 /// Reads the frames a previous run of the same folder finished (`frames.csv`), by name.
-fn finished_frames(out: &Path) -> Result<Vec<(String, String)>> {
+fn finished_frames(out: &Path) -> Result<Vec<Finished>> {
     let path = out.join("frames.csv");
     if !path.exists() {
         return Ok(Vec::new());
     }
     let text = crate::files::read_text(&path)?;
     let mut lines = text.lines();
-    if lines.next() != Some(FRAMES_HEADER) {
-        return Err(Error::input(
-            &path,
-            Some(1),
-            None,
-            "not a daystep frames.csv (header differs): use another --out folder",
-        ));
-    }
+    let fingerprinted = match lines.next() {
+        Some(FRAMES_HEADER) => true,
+        Some(FRAMES_HEADER_V1) => false,
+        _ => {
+            return Err(Error::input(
+                &path,
+                Some(1),
+                None,
+                "not a daystep frames.csv (header differs): use another --out folder",
+            ))
+        }
+    };
     Ok(lines
         .filter(|l| !l.trim().is_empty())
-        .map(|l| {
-            let name = l.split(',').next().unwrap_or("").to_string();
-            (name, l.to_string())
+        .map(|l| Finished {
+            name: l.split(',').next().unwrap_or("").to_string(),
+            // The fingerprint is the last field but one; the quoted sky column before it may
+            // hold commas, so count from the right.
+            inputs: if fingerprinted {
+                l.rsplit(',').nth(1).unwrap_or("").to_string()
+            } else {
+                String::new()
+            },
+            line: l.to_string(),
         })
         .collect())
+}
+
+/// Version of [`frame_fingerprint`]: bump when what a frame's files depend on changes.
+const FRAME_INPUTS_VERSION: u32 = 1;
+
+/// Fingerprint (32 hex digits of BLAKE3) of everything that determines one frame's files:
+/// the scene's content (geometry, materials, sensors, faces, site, ground, frame), the
+/// view and render options, quality and seed, the frame's time and sky (or the inputs of
+/// a caller's sky), and the outputs asked for (PNG exposure, falsecolor, HDR, glare).
+/// The command line is left out: it is provenance only, and a rerun with another
+/// `--threads` or `--cache` must still resume.
+pub fn frame_fingerprint(
+    scene: &Scene,
+    quality: &Quality,
+    camera: &Camera,
+    outputs: &RenderOutputs,
+    plan: &FramePlan,
+) -> String {
+    let mut h = blake3::Hasher::new();
+    h.update(b"daystep render frame\0");
+    h.update(&FRAME_INPUTS_VERSION.to_le_bytes());
+    h.update(env!("CARGO_PKG_VERSION").as_bytes());
+    h.update(&crate::cache::scene_hash(scene, &Default::default(), b"render frame").0);
+    // Debug output prints every f64 exactly (shortest round-trip), so equal text means
+    // equal values.
+    let text = format!(
+        "{:?}|{:?}|{:?}|{}|{:?}|{:?}|{}|{}|{:?}|{:?}|{:?}|{:?}|{}|{:?}|{}|{}",
+        scene.materials,
+        scene.faces,
+        scene.site,
+        scene.ground_reflectance,
+        scene.origin,
+        scene.north_deg,
+        scene.y_up,
+        scene.input_triangles,
+        quality,
+        camera.view,
+        camera.options,
+        plan.spec,
+        plan.at.utc.to_rfc3339(),
+        (outputs.png, &outputs.falsecolor, outputs.glare),
+        outputs.hdr,
+        plan.sky_inputs,
+    );
+    h.update(&(text.len() as u64).to_le_bytes());
+    h.update(text.as_bytes());
+    h.update(&[u8::from(plan.sky.is_some())]);
+    let hex = h.finalize().to_hex();
+    hex.as_str()[..32].to_string()
 }
 
 /// What a render run writes besides each frame's EXR.
@@ -448,12 +530,29 @@ pub fn run_render(
             "glare needs an angular fisheye view (-vta, e.g. -vh 180 -vv 180)",
         ));
     }
-    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
-    let done = finished_frames(out)?;
-    let mut rows: Vec<(String, String)> = done
-        .into_iter()
-        .filter(|(name, _)| out.join(format!("{name}.exr")).exists())
+    crate::files::check_output_dir("--out", out)?;
+    if let Some(g) = &outputs.gltf {
+        crate::files::check_output_file("--gltf", g)?;
+    }
+    let fingerprints: Vec<String> = frames
+        .iter()
+        .map(|f| frame_fingerprint(scene, quality, camera, outputs, f))
         .collect();
+    let done = finished_frames(out)?;
+    // A frame is resumed only when a previous run finished it from the same inputs and
+    // its image is still there; any other row is rendered again and replaced.
+    let mut changed = 0;
+    let mut rows: Vec<(String, String)> = Vec::new();
+    for d in done {
+        let Some(k) = frames.iter().position(|f| f.name == d.name) else {
+            continue;
+        };
+        if d.inputs != fingerprints[k] {
+            changed += 1;
+        } else if out.join(format!("{}.exr", d.name)).exists() {
+            rows.push((d.name, d.line));
+        }
+    }
     let mut report = RenderReport {
         version: env!("CARGO_PKG_VERSION").into(),
         scene: scene.path.display().to_string(),
@@ -472,9 +571,17 @@ pub fn run_render(
         warnings: scene.warnings.clone(),
         ..RenderReport::default()
     };
-    let todo: Vec<&FramePlan> = frames
+    if changed > 0 {
+        report.warnings.push(format!(
+            "{}: {changed} frames were rendered before with other inputs (scene, view, size, \
+             sky, quality, seed or outputs) and are rendered again",
+            out.display()
+        ));
+    }
+    let todo: Vec<(&FramePlan, &String)> = frames
         .iter()
-        .filter(|f| !rows.iter().any(|(n, _)| *n == f.name))
+        .zip(&fingerprints)
+        .filter(|(f, _)| !rows.iter().any(|(n, _)| *n == f.name))
         .collect();
     report.resumed = frames.len() - todo.len();
     (control.progress)(report.resumed, frames.len());
@@ -491,7 +598,7 @@ pub fn run_render(
     }
     let (mut step_s, mut gather_s) = (Vec::new(), Vec::new());
     let mut gltf_frames = Vec::new();
-    for plan in todo {
+    for (plan, inputs) in todo {
         if control.stop.load(Ordering::SeqCst) {
             report.interrupted = true;
             break;
@@ -546,6 +653,7 @@ pub fn run_render(
         }
         row.sky = frame.step.report.sky.clone();
         row.seconds = t.elapsed().as_secs_f64();
+        row.inputs = inputs.clone();
         if outputs.gltf.is_some() {
             if let (Some(op), Some(st)) = (renderer.engine().operator(), frame.step.state.as_ref())
             {
