@@ -6,7 +6,8 @@
 //! The pictures are written byte by byte here, from the formats' documentation (Radiance's
 //! RGBE header and old-style runs; OpenEXR's magic, version, attributes and offset table),
 //! not by daystep's writers. Property tests of the two readers (arbitrary and mutated
-//! bytes, allocation measured) are in `parsers.rs`, next to the other parsers'.
+//! bytes, allocation measured) are in `parsers.rs`, next to the other parsers', and use
+//! [`exr_header`].
 
 use crate::util::stderr;
 use std::path::{Path, PathBuf};
@@ -113,7 +114,7 @@ fn exr_attribute(out: &mut Vec<u8>, name: &str, kind: &str, value: &[u8]) {
 /// (in the sorted order the format asks for) and `compression` (0 none, 3 ZIP), as the
 /// OpenEXR file layout describes it: magic 76 2f 31 01, version 2 with no flags, the
 /// required attributes, a null byte. The offset table is the caller's.
-fn exr_header(w: i32, h: i32, compression: u8, channels: &[&str]) -> Vec<u8> {
+pub(crate) fn exr_header(w: i32, h: i32, compression: u8, channels: &[&str]) -> Vec<u8> {
     let mut out = vec![0x76, 0x2f, 0x31, 0x01, 2, 0, 0, 0];
     let mut list = Vec::new();
     for c in channels {
