@@ -16,7 +16,7 @@
 
 use crate::error::{Error, Result};
 use crate::photometry::Rgb;
-use crate::render::image::{Image, Quantity};
+use crate::render::image::{check_size, Image, Quantity};
 use crate::scene::view::View;
 use std::path::Path;
 
@@ -251,18 +251,42 @@ pub fn decode_hdr(bytes: &[u8], path: &Path) -> Result<(Image, Option<String>)> 
         )
     })?;
     let (w, h) = (layout.width(), layout.height());
-    let mut image = Image::new(w, h, Quantity::Radiance);
+    check_size(path, w, h, 3)?;
+    let data = &bytes[pos..];
+    // Refuses a file too short for its declared size before anything is allocated.
+    let least = layout.len1.saturating_mul(min_scanline_bytes(layout.len2));
+    if data.len() < least {
+        return Err(Error::input(
+            path,
+            None,
+            Some(&format!("{w} x {h}")),
+            format!(
+                "{w} x {h} pixels need at least {least} bytes of scanlines, the file holds {} \
+                 (truncated or corrupt picture)",
+                data.len()
+            ),
+        ));
+    }
     let mut scan = vec![[0u8; 4]; layout.len2];
-    let mut data = &bytes[pos..];
+    let scanline_error = |s: usize, msg: String| {
+        Error::input(
+            path,
+            None,
+            Some(&format!("scanline {} of {}", s + 1, layout.len1)),
+            msg,
+        )
+    };
+    // Old-style runs can encode a scanline of 65 536 pixels in 12 bytes, so a small file may
+    // still declare a large picture: every scanline is decoded once without being kept, and
+    // the image is allocated only for a file that does hold all the pixels it declares.
+    let mut rest = data;
     for s in 0..layout.len1 {
-        read_scanline(&mut data, &mut scan).map_err(|msg| {
-            Error::input(
-                path,
-                None,
-                Some(&format!("scanline {} of {}", s + 1, layout.len1)),
-                msg,
-            )
-        })?;
+        read_scanline(&mut rest, &mut scan).map_err(|msg| scanline_error(s, msg))?;
+    }
+    let mut image = Image::try_new(w, h, Quantity::Radiance, path)?;
+    let mut data = data;
+    for s in 0..layout.len1 {
+        read_scanline(&mut data, &mut scan).map_err(|msg| scanline_error(s, msg))?;
         for (k, p) in scan.iter().enumerate() {
             let (col, row) = layout.pixel(s, k);
             image.rgb[row * w + col] = from_rgbe(*p) / exposure;
@@ -352,6 +376,30 @@ impl Layout {
     }
 }
 
+/// The fewest bytes any scanline of `len` (≥ 1) pixels can take, whichever way it is
+/// encoded, so that `len1 ×` this is a lower bound of the bytes after a picture's resolution
+/// line:
+///
+/// - flat: 4 bytes a pixel, `4·len`;
+/// - new-style runs: the 4-byte `2 2 hi lo` pixel, then each of the 4 byte planes in
+///   records of a run (2 bytes for at most 127 pixels) or literals (`k + 1` bytes for `k` ≤
+///   128 pixels, never fewer than the `2·⌈k/127⌉` bytes of runs), so `4 + 8·⌈len/127⌉`;
+/// - old-style runs: the first pixel (4 bytes), then 4-byte records; `r` consecutive
+///   `1 1 1 n` repeat records (counts shifted by 0, 8, 16, … bits) repeat at most
+///   `256^r − 1` pixels and a literal in between only resets the shift, so `4·(1 + r)` with
+///   `r` the number of base-256 digits of `len − 1`.
+///
+/// The least of the three is the old-style one (at most 12 bytes up to 65 536 pixels).
+fn min_scanline_bytes(len: usize) -> usize {
+    let mut rest = len.saturating_sub(1);
+    let mut records = 0;
+    while rest > 0 {
+        records += 1;
+        rest >>= 8;
+    }
+    4 * (1 + records)
+}
+
 /// Reads one scanline of `scan.len()` pixels from the front of `data` (advancing it).
 fn read_scanline(data: &mut &[u8], scan: &mut [[u8; 4]]) -> std::result::Result<(), String> {
     let len = scan.len();
@@ -377,14 +425,17 @@ fn read_scanline(data: &mut &[u8], scan: &mut [[u8; 4]]) -> std::result::Result<
         while j < len {
             let p: [u8; 4] = take(4)?.try_into().expect("4 bytes");
             if p[0] == 1 && p[1] == 1 && p[2] == 1 {
-                let count = (p[3] as usize) << shift;
-                if j + count > len {
+                let count = u64::from(p[3]) << shift;
+                if count > (len - j) as u64 {
                     return Err("old-style run overruns the scanline".into());
                 }
+                let count = count as usize;
                 let prev = scan[j - 1];
                 scan[j..j + count].fill(prev);
                 j += count;
-                shift += 8;
+                // Repeats of zero keep shifting; held at 32 bits (any non-zero count then
+                // overruns a scanline of at most 2^16 pixels), the shift cannot overflow.
+                shift = (shift + 8).min(32);
             } else {
                 scan[j] = p;
                 j += 1;
@@ -548,11 +599,121 @@ mod tests {
         assert!(e.contains("r.hdr:4") && e.contains("+Q"), "{e}");
         let mut b = header("", "-Y 2 +X 8");
         b.extend_from_slice(&[2, 2, 0, 8, 128 + 8, 1]);
+        // Long enough for two scanlines of 8 pixels (8 bytes each at least): the run-length
+        // code 0 of the second byte plane is what is wrong.
+        b.resize(b.len() + 10, 0);
         let e = decode_hdr(&b, Path::new("t.hdr")).unwrap_err().to_string();
         assert!(e.contains("t.hdr") && e.contains("scanline 1 of 2"), "{e}");
         let e = decode_hdr(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n", Path::new("h.hdr"))
             .unwrap_err()
             .to_string();
         assert!(e.contains("h.hdr") && e.contains("header"), "{e}");
+    }
+
+    #[test]
+    fn a_64_byte_picture_claiming_65536_squared_pixels_is_refused_before_allocating() {
+        // As filed: each side within Radiance's limits, the product 2^32 pixels (103 GB as
+        // an image), allocated before any pixel was read.
+        let mut b = header("", "-Y 65536 +X 65536");
+        b.resize(64, 2);
+        let path = Path::new("dir/big.hdr");
+        let (shown, p, _, value) = crate::error::input_parts(decode_hdr(&b, path).unwrap_err());
+        assert_eq!(p, path);
+        assert_eq!(value.as_deref(), Some("65536 x 65536"));
+        assert!(
+            shown.contains("65536 x 65536 pixels is more than daystep reads (2^28 pixels)"),
+            "{shown}"
+        );
+    }
+
+    #[test]
+    fn a_picture_shorter_than_its_declared_size_is_refused_before_allocating() {
+        // 4096 × 4096 is within the limit, but 4096 scanlines of 4096 pixels take at least
+        // 12 bytes each; the file holds one flat scanline's worth of old-style runs.
+        let mut b = header("", "-Y 4096 +X 4096");
+        b.extend_from_slice(&[128, 128, 128, 129, 1, 1, 1, 255, 1, 1, 1, 15]);
+        let path = Path::new("short.hdr");
+        let e = decode_hdr(&b, path).unwrap_err().to_string();
+        assert!(
+            e.contains("short.hdr")
+                && e.contains("4096 x 4096 pixels need at least 49152 bytes of scanlines")
+                && e.contains("the file holds 12"),
+            "{e}"
+        );
+        // Long enough, but its scanlines run out: refused (naming the scanline), with no
+        // image allocated first.
+        let mut b = header("", "-Y 4096 +X 4096");
+        b.resize(b.len() + 4096 * 12, 0);
+        let e = decode_hdr(&b, path).unwrap_err().to_string();
+        assert!(
+            e.contains("scanline 4 of 4096") && e.contains("ends early"),
+            "{e}"
+        );
+    }
+
+    /// The shortest old-style scanline of `len` pixels: the first pixel, then repeat records
+    /// holding the base-256 digits of `len - 1`, least significant first.
+    fn shortest_scanline(len: usize) -> Vec<u8> {
+        let mut out = vec![100, 50, 25, 130];
+        let mut rest = len - 1;
+        while rest > 0 {
+            out.extend_from_slice(&[1, 1, 1, (rest & 0xff) as u8]);
+            rest >>= 8;
+        }
+        out
+    }
+
+    #[test]
+    fn the_scanline_lower_bound_is_met_by_the_shortest_old_style_runs() {
+        // The bound must not refuse a valid picture: the shortest encoding meets it exactly
+        // and decodes to the full scanline, and no encoding can be shorter (one byte less
+        // is a truncated scanline).
+        for len in [1, 2, 255, 256, 257, 4096, 65535, 65536] {
+            let line = shortest_scanline(len);
+            assert_eq!(line.len(), min_scanline_bytes(len), "{len}");
+            let mut scan = vec![[0u8; 4]; len];
+            let mut data = &line[..];
+            read_scanline(&mut data, &mut scan).unwrap();
+            assert!(data.is_empty() && scan.iter().all(|p| *p == [100, 50, 25, 130]));
+            let mut cut = &line[..line.len() - 1];
+            assert!(read_scanline(&mut cut, &mut scan).is_err(), "{len}");
+        }
+        // New-style runs (what write_hdr writes) never undercut it.
+        for w in [8, 127, 128, 1000, 32767] {
+            let mut out = Vec::new();
+            encode_scanline(&vec![[7, 7, 7, 130]; w], &mut out);
+            assert!(out.len() >= min_scanline_bytes(w), "{w}");
+        }
+        // A whole 16 384 × 16 384 picture (the pixel limit) of 12-byte scanlines passes the
+        // file-size check.
+        let mut b = header("", "-Y 2 +X 16384");
+        b.extend(shortest_scanline(16384).repeat(2));
+        let (im, _) = decode_hdr(&b, Path::new("long.hdr")).unwrap();
+        assert_eq!((im.width, im.height, im.rgb.len()), (16384, 2, 32768));
+    }
+
+    #[test]
+    fn old_style_repeats_of_zero_do_not_overflow_the_run_shift() {
+        // Each repeat record shifts the next count by 8 more bits; nine records of zero
+        // used to shift by 64 (a panic on overflow checks). Zero repeats add nothing; a
+        // non-zero one past 32 bits overruns any scanline.
+        let mut b = header("", "-Y 1 +X 3");
+        b.extend_from_slice(&[10, 20, 30, 130]);
+        for _ in 0..9 {
+            b.extend_from_slice(&[1, 1, 1, 0]);
+        }
+        b.extend_from_slice(&[40, 50, 60, 130, 70, 80, 90, 130]);
+        let (im, _) = decode_hdr(&b, Path::new("zeros.hdr")).unwrap();
+        assert_eq!(im.rgb[2], from_rgbe([70, 80, 90, 130]));
+        let mut b = header("", "-Y 1 +X 3");
+        b.extend_from_slice(&[10, 20, 30, 130]);
+        for n in [0, 0, 0, 0, 1] {
+            b.extend_from_slice(&[1, 1, 1, n]);
+        }
+        b.extend_from_slice(&[0; 8]);
+        let e = decode_hdr(&b, Path::new("zeros.hdr"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("overruns"), "{e}");
     }
 }
