@@ -297,7 +297,12 @@ fn out_of_range_flags_exit_1_naming_the_flag_before_any_work() {
 fn scene_file_numbers_out_of_range_exit_1_naming_file_line_and_key() {
     let t = Scratch::new();
     let d = t.dir.path();
-    std::fs::write(d.join("m.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    std::fs::write(d.join("m.mtl"), "newmtl a\nKd 0.5 0.5 0.5\n").unwrap();
+    std::fs::write(
+        d.join("m.obj"),
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n",
+    )
+    .unwrap();
     for (site, line, key, value) in [
         (
             "latitude = nan\nlongitude = 0\nutc_offset_h = 0\n",
