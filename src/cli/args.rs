@@ -140,9 +140,9 @@ where
     }
 }
 
-/// Irradiance of `--dni` and `--dhi`, W/m². None reaches 2000 W/m² at the ground (the
-/// solar constant is 1361 W/m²); a larger number is usually illuminance in lux or a sum in
-/// Wh/m² given by mistake.
+/// Irradiance of `--dni` and `--dhi`, W/m². Irradiance at the ground stays below 2000 W/m²
+/// (the solar constant is 1361 W/m²); a larger number is usually illuminance in lux or a
+/// daily sum in Wh/m² given by mistake.
 pub const IRRADIANCE: Real = Real::closed(0.0, 2000.0, "W/m²");
 /// Dew point of `--dew-point`, °C: the EnergyPlus weather format's range (its data
 /// dictionary's `minimum> -70`, `maximum< 70`).
