@@ -19,6 +19,7 @@ mod outputs; // outputs checked before the work; a resumed render keeps only fra
 mod parsers; // every parser under arbitrary and mutated input: no panic, hang or unbounded allocation
 mod render; // renders against closed forms: ρL, ρE cos θ/π, τ(θ)L, -i, threads
 mod pictures; // pictures cannot exhaust memory: huge or short RGBE and OpenEXR refused with exit 1 under ulimit -v
+mod numbers; // every number a user types is checked: flags, view files, scene-file values, exit 1 before any work
 mod physics; // closed-form daylight: unobstructed skies, roof opening, thin sky band, sun footprint, glazing
 mod transport; // global-line transport: furnace, configuration factor, closed rooms (exact enclosure), strata, warm = cold, threads
 mod twosided; // two-sided surfaces: back-face closed form, normal flips, one surface or two, emitter front only

@@ -69,7 +69,7 @@ pub fn run(a: AnnualArgs) -> Result<()> {
         start: day("--start", &a.start)?,
         end: day("--end", &a.end)?,
         shard,
-        metrics: config::metric_params(&a.metrics),
+        metrics: config::metric_params(&a.metrics)?,
         ill: a.ill,
         surfaces: a.surfaces,
         daylight_coefficients: !a.forward,

@@ -36,8 +36,8 @@ fn need(name: &str, v: Option<f64>, sky: &str) -> Result<f64> {
 }
 
 /// The sky of `--sky` with its parameters: irradiances `--dni`, `--dhi` in W/m², CIE
-/// `--type` 1–15, Preetham `--turbidity`, `--dew-point` in °C. Values are checked by the
-/// sky models when the sky is built; here only their presence.
+/// `--type` 1–15, Preetham `--turbidity`, `--dew-point` in °C. Their ranges were checked
+/// when the command line was parsed ([`super::args`]); here only their presence.
 ///
 /// # Errors
 /// [`Error::Input`] naming the flag the chosen sky needs and lacks.
@@ -101,10 +101,31 @@ pub fn store(dir: &Path, no_cache: bool) -> Store {
 }
 
 /// The annual-metric thresholds of the `--occupancy-*`, `--da-threshold`, `--udi-*`,
-/// `--sda-fraction` and `--ase-*` flags (hours, lux, fractions as the flags say); their
-/// consistency is checked by [`MetricParams::validate`].
-pub fn metric_params(m: &MetricArgs) -> MetricParams {
-    MetricParams {
+/// `--sda-fraction` and `--ase-*` flags (hours, lux, fractions as the flags say). Each
+/// flag's range was checked when the command line was parsed; here the pairs.
+///
+/// # Errors
+/// [`Error::Input`] naming the flag when `--occupancy-end` is before `--occupancy-start`
+/// or `--udi-min` is not below `--udi-max`, and every error of [`MetricParams::validate`].
+pub fn metric_params(m: &MetricArgs) -> Result<MetricParams> {
+    if m.occupancy_end < m.occupancy_start {
+        return Err(Error::arg(
+            "--occupancy-end",
+            m.occupancy_end,
+            format!(
+                "the last occupied hour must not be before --occupancy-start {}",
+                m.occupancy_start
+            ),
+        ));
+    }
+    if m.udi_min >= m.udi_max {
+        return Err(Error::arg(
+            "--udi-min",
+            m.udi_min,
+            format!("must be below --udi-max {} lux", m.udi_max),
+        ));
+    }
+    let p = MetricParams {
         occupancy_start_hour: m.occupancy_start,
         occupancy_end_hour: m.occupancy_end,
         da_threshold_lux: m.da_threshold,
@@ -113,6 +134,25 @@ pub fn metric_params(m: &MetricArgs) -> MetricParams {
         sda_da_fraction: m.sda_fraction,
         ase_threshold_lux: m.ase_threshold,
         ase_hours: m.ase_hours,
+    };
+    p.validate()?;
+    Ok(p)
+}
+
+/// The image size `-x` × `-y`, pixels: each side at least 1 (checked when parsed) and at
+/// most [`super::args::MAX_PIXELS`] pixels in all.
+///
+/// # Errors
+/// [`Error::Input`] on `-x` naming both sides when the image is larger.
+pub fn image_size(width: usize, height: usize) -> Result<(usize, usize)> {
+    let max = super::args::MAX_PIXELS;
+    match width.checked_mul(height) {
+        Some(n) if n <= max && width > 0 && height > 0 => Ok((width, height)),
+        _ => Err(Error::arg(
+            "-x",
+            format!("{width} -y {height}"),
+            format!("an image has at most 2^28 = {max} pixels (16384 × 16384)"),
+        )),
     }
 }
 

@@ -11,7 +11,7 @@ use crate::error::Result;
 /// Shards that do not belong together or cannot be read ([`crate::Error::Input`]),
 /// unwritable output.
 pub fn run(a: MergeArgs) -> Result<()> {
-    let params = config::metric_params(&a.metrics);
+    let params = config::metric_params(&a.metrics)?;
     super::check_outputs(&a.out, None)?;
     crate::sequence::annual::merge(&a.parts, &a.out, a.step, &params)?;
     note!(

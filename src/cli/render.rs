@@ -6,7 +6,6 @@ use super::messages::{note, warnings};
 use crate::error::{Error, Result};
 use crate::render::falsecolor::Falsecolor;
 use crate::render::glare::{GlareOptions, Threshold};
-use crate::render::tonemap::Exposure;
 use crate::render::{Quantity, RenderOptions};
 use crate::scene::view::View;
 use crate::scene::Scene;
@@ -15,7 +14,8 @@ use crate::sequence::render::{plan_weather, run_render, Camera, FramePlan, Rende
 use crate::sequence::StepTime;
 use std::path::Path;
 
-/// The camera of the arguments: `--vf`, then `--view` over it.
+/// The camera of the arguments: `--vf`, then `--view` over it. Each must set a view option
+/// (a view file that sets none is refused, as rpict refuses a "bad view file").
 fn view(a: &RenderArgs) -> Result<View> {
     let mut v = View::default();
     if let Some(f) = &a.vf {
@@ -34,20 +34,6 @@ fn view(a: &RenderArgs) -> Result<View> {
     Ok(v)
 }
 
-fn exposure(v: &str) -> Result<Exposure> {
-    if v == "auto" {
-        return Ok(Exposure::Auto);
-    }
-    match v.parse::<f64>() {
-        Ok(x) if x.is_finite() && x > 0.0 => Ok(Exposure::Given(x)),
-        _ => Err(Error::arg(
-            "--exposure",
-            v,
-            "expected \"auto\" or a positive multiplier",
-        )),
-    }
-}
-
 /// Runs `daystep render` into `--out`; a rerun with the same folder continues.
 ///
 /// # Errors
@@ -55,17 +41,15 @@ fn exposure(v: &str) -> Result<Exposure> {
 /// [`Error::Interrupted`] after Ctrl-C, once the finished frames are written.
 pub fn run(a: RenderArgs) -> Result<()> {
     let q = config::quality(&a.run.quality, a.run.seed)?;
-    for (flag, v) in [("-x", a.width), ("-y", a.height)] {
-        if v == 0 || v > 16384 {
-            return Err(Error::arg(flag, v, "image size must be 1..16384 pixels"));
-        }
-    }
+    // Every number of the flags was checked when they were parsed; the image's area and
+    // the camera are checked here, before the scene is read.
+    let (width, height) = config::image_size(a.width, a.height)?;
     let camera = Camera {
         view: view(&a)?,
         options: RenderOptions {
-            width: a.width,
-            height: a.height,
-            samples: a.samples.max(1),
+            width,
+            height,
+            samples: a.samples,
             gather_rays: a.gather,
             quantity: if a.irradiance {
                 Quantity::Irradiance
@@ -140,7 +124,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         }
     };
     let outputs = RenderOutputs {
-        png: Some(exposure(&a.exposure)?),
+        png: Some(a.exposure),
         falsecolor: a.falsecolor.then(|| Falsecolor {
             scale_max: a.scale,
             steps: a.steps,

@@ -60,8 +60,9 @@ struct SiteToml {
 /// # Errors
 /// [`Error::Input`] naming file, line and value: TOML syntax, a missing `geometry`, a
 /// referenced file that does not exist, a value out of range (latitude outside [−90, 90],
-/// longitude outside [−180, 180], `utc_offset_h` outside [−14, 14], `ground_reflectance`
-/// outside [0, 1), anything non-finite, `up` not "z" or "y"), and every error of
+/// longitude outside [−180, 180], `utc_offset_h` outside [−14, 14], `elevation_m` outside
+/// [−1000, 10000] (the EPW header's range), `ground_reflectance` outside [0, 1), anything
+/// non-finite (TOML spells `nan` and `inf`), `up` not "z" or "y"), and every error of
 /// [`obj::load`] and [`sensors::load`]. [`Error::Io`] when a file cannot be read.
 pub fn load(path: &Path) -> Result<Scene> {
     let text = files::read_text(path)?;
@@ -208,51 +209,64 @@ fn parse(path: &Path, text: &str) -> Result<Parsed> {
         },
     };
 
-    // A number with its allowed range; `None` range = any finite value.
-    let check = |key: &str, v: &Spanned<f64>, range: Option<(f64, f64, bool)>| -> Result<f64> {
-        let x = *v.get_ref();
-        let ok = x.is_finite()
-            && range.is_none_or(|(lo, hi, closed)| x >= lo && (x < hi || (closed && x <= hi)));
-        if ok {
-            return Ok(x);
-        }
-        let message = match range {
-            Some((lo, hi, true)) => format!("`{key}` must be in [{lo}, {hi}]"),
-            Some((lo, hi, false)) => format!("`{key}` must be in [{lo}, {hi})"),
-            None => format!("`{key}` must be finite"),
+    // A number with its allowed range (`None`: any finite value) and unit.
+    let check =
+        |key: &str, v: &Spanned<f64>, range: Option<(f64, f64, bool)>, unit: &str| -> Result<f64> {
+            let x = *v.get_ref();
+            let ok = x.is_finite()
+                && range.is_none_or(|(lo, hi, closed)| x >= lo && (x < hi || (closed && x <= hi)));
+            if ok {
+                return Ok(x);
+            }
+            let message = match range {
+                Some((lo, hi, true)) => format!("`{key}` must be in [{lo}, {hi}]{unit}"),
+                Some((lo, hi, false)) => format!("`{key}` must be in [{lo}, {hi}){unit}"),
+                None => format!("`{key}` must be a finite number{unit}"),
+            };
+            Err(Error::input(
+                path,
+                at(v.span()),
+                Some(&x.to_string()),
+                message,
+            ))
         };
-        Err(Error::input(
-            path,
-            at(v.span()),
-            Some(&x.to_string()),
-            message,
-        ))
-    };
     let north_deg = raw
         .north_deg
         .as_ref()
-        .map(|v| check("north_deg", v, None))
+        .map(|v| check("north_deg", v, None, " (degrees)"))
         .transpose()?
         .unwrap_or(0.0);
     let ground_reflectance = raw
         .ground_reflectance
         .as_ref()
-        .map(|v| check("ground_reflectance", v, Some((0.0, 1.0, false))))
+        .map(|v| check("ground_reflectance", v, Some((0.0, 1.0, false)), ""))
         .transpose()?
         .unwrap_or(0.2);
     let site = match &raw.site {
         Some(s) => Site {
-            latitude: check("site.latitude", &s.latitude, Some((-90.0, 90.0, true)))?,
-            longitude: check("site.longitude", &s.longitude, Some((-180.0, 180.0, true)))?,
+            latitude: check(
+                "site.latitude",
+                &s.latitude,
+                Some((-90.0, 90.0, true)),
+                " degrees north",
+            )?,
+            longitude: check(
+                "site.longitude",
+                &s.longitude,
+                Some((-180.0, 180.0, true)),
+                " degrees east",
+            )?,
             utc_offset_h: check(
                 "site.utc_offset_h",
                 &s.utc_offset_h,
                 Some((-14.0, 14.0, true)),
+                " hours east of UTC",
             )?,
+            // The EPW header's range: from the Dead Sea shore to above Everest.
             elevation_m: s
                 .elevation_m
                 .as_ref()
-                .map(|v| check("site.elevation_m", v, None))
+                .map(|v| check("site.elevation_m", v, Some((-1000.0, 10000.0, true)), " m"))
                 .transpose()?
                 .unwrap_or(0.0),
         },
@@ -481,6 +495,28 @@ f 1 2 4
                 Some("NaN"),
             ),
             (format!("{g}north_deg = inf\n"), Some(2), Some("inf")),
+            (
+                format!("{g}[site]\nlatitude = 0\nlongitude = -inf\nutc_offset_h = 0\n"),
+                Some(4),
+                Some("-inf"),
+            ),
+            (
+                format!("{g}[site]\nlatitude = 0\nlongitude = 0\nutc_offset_h = nan\n"),
+                Some(5),
+                Some("NaN"),
+            ),
+            (
+                format!(
+                    "{g}[site]\nlatitude = 0\nlongitude = 0\nutc_offset_h = 0\nelevation_m = nan\n"
+                ),
+                Some(6),
+                Some("NaN"),
+            ),
+            (
+                format!("{g}ground_reflectance = -nan\n"),
+                Some(2),
+                Some("NaN"),
+            ),
             (format!("{g}ground_reflectance = 1.0\n"), Some(2), Some("1")),
             (format!("{g}up = \"x\"\n"), Some(2), Some("x")),
             (
@@ -501,6 +537,26 @@ f 1 2 4
             assert!(shown.contains("scene.toml"), "{shown}");
             assert_eq!(l, line, "{shown}");
             assert_eq!(v.as_deref(), value, "{shown}");
+        }
+    }
+
+    #[test]
+    fn elevation_beyond_any_site_is_refused() {
+        let site = |e: &str| {
+            format!(
+                "geometry = \"geo/a.obj\"\n[site]\nlatitude = 0\nlongitude = 0\n\
+                 utc_offset_h = 0\nelevation_m = {e}\n"
+            )
+        };
+        for bad in ["1e6", "-5000", "10000.5"] {
+            let (_d, r) = load_scene(&site(bad));
+            let (shown, line, _) = input_error(r.unwrap_err());
+            assert_eq!(line, Some(6), "{shown}");
+            assert!(shown.contains("site.elevation_m"), "{shown}");
+        }
+        for good in ["8849", "-430", "0"] {
+            let (_d, r) = load_scene(&site(good));
+            assert_eq!(r.unwrap().site.elevation_m, good.parse::<f64>().unwrap());
         }
     }
 

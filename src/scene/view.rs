@@ -37,7 +37,7 @@ pub struct View {
     pub vp: DVec3,
     /// View direction (unit).
     pub vd: DVec3,
-    /// Up vector (as given; only its component across `vd` matters).
+    /// Up vector (unit; only its component across `vd` matters).
     pub vu: DVec3,
     /// Horizontal size: degrees, or m for [`ViewType::Parallel`].
     pub vh: f64,
@@ -64,17 +64,68 @@ impl Default for View {
     }
 }
 
+/// Largest eye-point coordinate (`-vp`) and parallel-view size (`-vh`, `-vv` of `-vtl`),
+/// m: a million kilometres, far beyond any site, and small enough that every ray a view
+/// makes stays finite.
+pub const MAX_COORDINATE_M: f64 = 1e9;
+
+/// Largest view shift or lift (`-vs`, `-vl`), in image widths or heights: a thousand tiles
+/// of a tiled rendering either way.
+pub const MAX_SHIFT: f64 = 1000.0;
+
+/// What rpict calls a view file or view text that sets no view option, and why.
+const NO_VIEW: &str = "bad view file: it sets no view option (-vt?, -vp, -vd, -vu, -vh, -vv, \
+                       -vo, -va, -vs, -vl), so there is no camera; rpict refuses it too";
+
+/// `v` scaled to unit length (left as it is when it already is, so that a view read back
+/// from [`View::options`] is the same view); `None` when it is zero or not finite.
+fn unit(v: DVec3) -> Option<DVec3> {
+    if !v.is_finite() {
+        return None;
+    }
+    // Scaled by its largest component first, so that neither huge nor tiny components
+    // overflow or underflow when squared.
+    let m = v.abs().max_element();
+    if m == 0.0 {
+        return None;
+    }
+    if (v.length_squared() - 1.0).abs() <= 1e-12 {
+        return Some(v);
+    }
+    let s = v / m;
+    Some(s / s.length())
+}
+
 impl View {
     /// The view given by Radiance view options in `text` (whitespace-separated; other
     /// options and a leading program name such as `rvu` are ignored), applied over `self`.
     /// `source` names where the text came from, for errors.
     ///
     /// # Errors
-    /// A view option with a missing or non-numeric value, an unknown `-vt` type, or a
-    /// view that is not usable (see [`View::check`]), naming `source` and the value.
-    pub fn with_options(mut self, text: &str, source: &Path, line: Option<usize>) -> Result<View> {
+    /// Text that sets no view option (as rpict's "bad view file"), a view option with a
+    /// missing or non-numeric value, an unknown `-vt` type, a clipping plane (`-vo`, `-va`)
+    /// other than 0, or a view that is not usable (see [`View::check`]), naming `source`
+    /// and the value.
+    pub fn with_options(self, text: &str, source: &Path, line: Option<usize>) -> Result<View> {
+        let (v, set) = self.apply(text, source, line)?;
+        if set == 0 {
+            let value = text.trim();
+            return Err(Error::input(
+                source,
+                line,
+                Some(value).filter(|v| !v.is_empty()),
+                NO_VIEW,
+            ));
+        }
+        v.check(source, line)
+    }
+
+    /// The options of `text` applied over `self`, unchecked, and how many view options it
+    /// set.
+    fn apply(mut self, text: &str, source: &Path, line: Option<usize>) -> Result<(View, usize)> {
         let tokens: Vec<&str> = text.split_whitespace().collect();
         let bad = |value: &str, msg: &str| Error::input(source, line, Some(value), msg);
+        let mut set = 0;
         let mut i = 0;
         while i < tokens.len() {
             let t = tokens[i];
@@ -108,80 +159,134 @@ impl View {
                     }
                     i += 3;
                 }
-                "-vh" | "-vv" | "-vs" | "-vl" => {
+                "-vh" | "-vv" | "-vs" | "-vl" | "-vo" | "-va" => {
                     let v = num(1)?;
                     match t {
                         "-vh" => self.vh = v,
                         "-vv" => self.vv = v,
                         "-vs" => self.vs = v,
-                        _ => self.vl = v,
+                        "-vl" => self.vl = v,
+                        // rvu writes `-vo 0 -va 0` into every view file; other clipping
+                        // planes would change the picture, and daystep has none.
+                        _ if v != 0.0 => {
+                            return Err(bad(
+                                &format!("{t} {v}"),
+                                "clipping planes (-vo, -va) are not supported; only 0",
+                            ))
+                        }
+                        _ => {}
                     }
                     i += 1;
                 }
-                _ => {}
+                _ => {
+                    i += 1;
+                    continue;
+                }
             }
+            set += 1;
             i += 1;
         }
-        self.check(source, line)
+        Ok((self, set))
     }
 
     /// Reads a view file as rvu saves it (`rvu -vtv -vp … -vd …`, one view per line; `#`
     /// comments): the options of every line, in order, over Radiance's defaults.
     ///
     /// # Errors
-    /// An unreadable file, or a bad option naming the file and line.
+    /// An unreadable file, a bad option naming the file and line, or a file that sets no
+    /// view option at all (empty, comments only, `rvu` alone, other options only), which
+    /// rpict calls a "bad view file".
     pub fn read_file(path: &Path) -> Result<View> {
         let text = crate::files::read_text(path)?;
         let mut v = View::default();
+        let mut set = 0;
+        let mut first = None;
         for (n, l) in text.lines().enumerate() {
             let l = l.split('#').next().unwrap_or("");
             if l.trim().is_empty() {
                 continue;
             }
-            v = v.with_options(l, path, Some(n + 1))?;
+            first.get_or_insert((n + 1, l.trim()));
+            let (next, k) = v.apply(l, path, Some(n + 1))?;
+            if k > 0 {
+                v = next.check(path, Some(n + 1))?;
+                set += k;
+            }
+        }
+        if set == 0 {
+            let (line, value) = first.unzip();
+            return Err(Error::input(path, line, value, NO_VIEW));
         }
         Ok(v)
     }
 
-    /// Checks that the view can make rays: a non-zero direction, an up vector not along
-    /// it, and positive sizes within the type's range; normalises `vd`.
+    /// Checks that the view can make rays, as Radiance's `setview` does: every number
+    /// finite, a non-zero direction, a non-zero up vector not along it, and positive sizes
+    /// within the type's range (perspective below 180°, angular fisheye up to 360°,
+    /// hemispherical up to 180°, parallel up to [`MAX_COORDINATE_M`]); also the eye within
+    /// [`MAX_COORDINATE_M`] of the origin and shifts within [`MAX_SHIFT`]. Normalises `vd`
+    /// and `vu`.
     ///
     /// # Errors
     /// [`Error::Input`] naming `source` (and `line`) and the offending value.
     pub fn check(mut self, source: &Path, line: Option<usize>) -> Result<View> {
         let bad = |value: String, msg: &str| Error::input(source, line, Some(&value), msg);
-        let len = self.vd.length();
-        if len < 1e-12 {
+        let shown = |name: &str, v: DVec3| format!("{name} {} {} {}", v.x, v.y, v.z);
+        if !(self.vp.is_finite() && self.vp.abs().max_element() <= MAX_COORDINATE_M) {
             return Err(bad(
-                format!("{:?}", self.vd),
-                "view direction -vd must not be zero",
+                shown("-vp", self.vp),
+                "the eye -vp must be finite and within 1e9 m of the origin",
             ));
         }
-        self.vd /= len;
-        if self.vu.cross(self.vd).length() < 1e-9 * self.vu.length().max(1e-300) {
+        self.vd = unit(self.vd).ok_or_else(|| {
+            bad(
+                shown("-vd", self.vd),
+                "view direction -vd must be finite and not zero",
+            )
+        })?;
+        self.vu = unit(self.vu).ok_or_else(|| {
+            bad(
+                shown("-vu", self.vu),
+                "up vector -vu must be finite and not zero",
+            )
+        })?;
+        if self.vu.cross(self.vd).length() < 1e-9 {
             return Err(bad(
-                format!("{:?}", self.vu),
+                shown("-vu", self.vu),
                 "up vector -vu must not be parallel to -vd",
             ));
         }
-        let max = match self.kind {
-            ViewType::Perspective => 179.999,
-            ViewType::Angular => 360.0,
-            ViewType::Hemispherical => 180.0,
-            ViewType::Parallel => f64::INFINITY,
+        let (range, what) = match self.kind {
+            ViewType::Perspective => ("(0, 180) degrees", "a perspective view (-vtv)"),
+            ViewType::Angular => ("(0, 360] degrees", "an angular fisheye (-vta)"),
+            ViewType::Hemispherical => ("(0, 180] degrees", "a hemispherical fisheye (-vth)"),
+            ViewType::Parallel => ("(0, 1e9] m", "a parallel view (-vtl)"),
+        };
+        let fits = |v: f64| match self.kind {
+            ViewType::Perspective => v > 0.0 && v < 180.0,
+            ViewType::Angular => v > 0.0 && v <= 360.0,
+            ViewType::Hemispherical => v > 0.0 && v <= 180.0,
+            ViewType::Parallel => v > 0.0 && v <= MAX_COORDINATE_M,
         };
         for (name, v) in [("-vh", self.vh), ("-vv", self.vv)] {
-            if !(v > 0.0 && v <= max) {
+            if !fits(v) {
                 return Err(bad(
                     format!("{name} {v}"),
-                    "view size out of range for its type",
+                    &format!("view size out of range for {what}: {range}"),
+                ));
+            }
+        }
+        for (name, v) in [("-vs", self.vs), ("-vl", self.vl)] {
+            if !(v.is_finite() && v.abs() <= MAX_SHIFT) {
+                return Err(bad(
+                    format!("{name} {v}"),
+                    "view shift and lift must be finite, within ±1000 image sizes",
                 ));
             }
         }
         Ok(self)
     }
 
-    /// The image's right and up unit vectors.
     /// The view as Radiance view options (`-vtv -vp x y z -vd … -vu … -vh … -vv … -vs …
     /// -vl …`), as rvu saves them and image headers (`VIEW=`) carry them.
     pub fn options(&self) -> String {
@@ -204,6 +309,7 @@ impl View {
         )
     }
 
+    /// The image's right and up unit vectors.
     fn frame(&self) -> (DVec3, DVec3) {
         let right = self.vd.cross(self.vu).normalize();
         (right, right.cross(self.vd).normalize())
@@ -349,6 +455,79 @@ mod tests {
             e.contains("v.vf") && e.contains(":2") && e.contains("-vh 0"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn a_view_file_that_sets_no_view_is_a_bad_view_file() {
+        // An empty .vf rendered from the origin along +y; rpict says "bad view file".
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("empty.vf");
+        for text in [
+            "",
+            "\n\n",
+            "# saved by nobody\n",
+            "rvu\n",
+            "rvu -x 800 -y 600\n# -vtv -vp 1 2 3\n",
+        ] {
+            std::fs::write(&p, text).unwrap();
+            let e = View::read_file(&p).unwrap_err();
+            let (shown, path, _, _) = crate::error::input_parts(e);
+            assert_eq!(path, p, "{text:?}: {shown}");
+            assert!(shown.contains("bad view file"), "{text:?}: {shown}");
+        }
+        // One option anywhere in the file is a view (Radiance's defaults for the rest).
+        std::fs::write(&p, "rvu\n-vo 0\n").unwrap();
+        assert_eq!(View::read_file(&p).unwrap(), View::default());
+        for text in ["", "   ", "rvu", "rpict -x 10 -ab 2", "-vz 1"] {
+            let e = parse(text).unwrap_err().to_string();
+            assert!(
+                e.contains("bad view file") && e.contains("<test>"),
+                "{text:?}: {e}"
+            );
+        }
+    }
+
+    #[test]
+    fn clipping_planes_other_than_zero_are_refused() {
+        // rvu writes `-vo 0 -va 0`; daystep has no clipping, so anything else would be
+        // ignored silently.
+        let v = parse("rvu -vtv -vp 1 2 3 -vd 0 1 0 -vo 0 -va 0 -vs 0 -vl 0").unwrap();
+        assert_eq!(v.vp, DVec3::new(1.0, 2.0, 3.0));
+        for bad in ["-vo 0.5", "-va 10", "-vo nan", "-va"] {
+            assert!(parse(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn view_sizes_are_checked_per_type_with_their_range() {
+        for (ok, bad) in [
+            ("-vtv -vh 179.9", "-vtv -vh 180"),
+            ("-vta -vh 360", "-vta -vh 360.1"),
+            ("-vth -vv 180", "-vth -vv 181"),
+            ("-vtl -vh 1e9", "-vtl -vh 1000000001"),
+        ] {
+            assert!(parse(ok).is_ok(), "{ok}");
+            let e = parse(bad).unwrap_err().to_string();
+            assert!(e.contains(bad.split_at(5).1), "{bad}: {e}");
+            assert!(e.contains("(0, "), "the range is named: {e}");
+        }
+        for bad in [
+            "-vh 0", "-vv -5", "-vh nan", "-vh inf", "-vs 1e4", "-vl inf",
+        ] {
+            assert!(parse(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn huge_or_tiny_directions_normalise_without_overflow() {
+        // |vd|² overflows to ∞ (or underflows to 0) when squared as given.
+        let v = parse("-vd 1e300 1e300 0 -vu 0 0 1e-300").unwrap();
+        assert!((v.vd - DVec3::new(1.0, 1.0, 0.0).normalize()).length() < 1e-15);
+        assert_eq!(v.vu, DVec3::Z);
+        let v = parse("-vd 1e-320 0 0").unwrap();
+        assert_eq!(v.vd, DVec3::X);
+        assert!(parse("-vp 2e9 0 0").is_err(), "eye beyond 1e9 m");
+        assert!(parse("-vu 0 0 0").is_err(), "zero up vector");
     }
 
     #[test]
