@@ -23,4 +23,5 @@ mod numbers; // every number a user types is checked: flags, view files, scene-f
 mod physics; // closed-form daylight: unobstructed skies, roof opening, thin sky band, sun footprint, glazing
 mod transport; // global-line transport: furnace, configuration factor, closed rooms (exact enclosure), strata, warm = cold, threads
 mod twosided; // two-sided surfaces: back-face closed form, normal flips, one surface or two, emitter front only
+mod viewer; // `daystep view`: a file that is not a GLB refused at start (exit 1); a foreign Host gets 403, its own the file
 mod warm_day; // 96 warm-started 15-minute steps of a clear day against cold solves

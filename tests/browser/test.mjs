@@ -15,7 +15,9 @@ const [url, glb, outDir, viewerHtml] = process.argv.slice(2);
 fs.mkdirSync(outDir, { recursive: true });
 
 const BASE = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
-  '--disable-background-networking', '--disable-component-update', '--disable-sync'];
+  '--disable-background-networking', '--disable-component-update', '--disable-sync',
+  // A foreign name that resolves to 127.0.0.1, as a DNS-rebinding attacker arranges.
+  '--host-resolver-rules=MAP attacker.example 127.0.0.1'];
 // Without a GPU, WebGL needs SwiftShader; newer Chromium only allows it when asked.
 const FALLBACKS = [[], ['--enable-unsafe-swiftshader'],
   ['--use-gl=angle', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'], ['--use-gl=swiftshader']];
@@ -95,14 +97,19 @@ async function launch(extra) {
 let failed = 0;
 function check(ok, text) { console.log((ok ? 'ok   ' : 'FAIL ') + text); if (!ok) failed++; }
 
-let run = null, page = null, flags = null;
+let run = null, page = null, flags = null, pageResponse = null;
+// Content-Security-Policy violations the page reports (Chromium logs each on the console).
+const cspViolations = [];
 for (const extra of FALLBACKS) {
   run = await launch(extra);
   page = run.ctx.pages()[0] || await run.ctx.newPage();
   const requests = [];
   page.on('request', (r) => requests.push(r.url()));
-  page.on('console', (m) => { if (m.type() === 'error') console.log('page console: ' + m.text()); });
-  await page.goto(url);
+  page.on('console', (m) => {
+    if (m.type() === 'error') console.log('page console: ' + m.text());
+    if (/Content Security Policy/i.test(m.text())) cspViolations.push(m.text());
+  });
+  pageResponse = await page.goto(url);
   try { await waitReady(page, url); } catch (e) {
     if (/WebGL/.test(e.message)) { console.log('no WebGL with [' + extra.join(' ') + '], trying the next flags'); await run.ctx.close(); continue; }
     throw e;
@@ -190,6 +197,25 @@ check(fps > 0, 'window.__fps is reported');
 
 const foreign = run.requests.filter((u) => !u.startsWith(new URL(url).origin + '/'));
 check(foreign.length === 0, `no request leaves the server's origin (${run.requests.length} requests${foreign.length ? ': ' + foreign.join(' ') : ''})`);
+
+// The server's protections, as the browser sees them (docs/viewer-server.md).
+const h = pageResponse.headers();
+check(/script-src 'sha256-/.test(h['content-security-policy'] || '') && h['x-content-type-options'] === 'nosniff',
+  `the page comes with its Content-Security-Policy and nosniff (${h['content-security-policy']})`);
+check(cspViolations.length === 0, `the page runs under its Content-Security-Policy with no violation (${cspViolations.length}${cspViolations.length ? ': ' + cspViolations[0] : ''})`);
+const glbName = new URL(url).searchParams.get('glb');
+const rebound = 'http://attacker.example:' + new URL(url).port;
+// The attacker's page, once its name resolves to 127.0.0.1, fetches the model same-origin.
+const attacker = await run.ctx.newPage();
+const rPage = await attacker.goto(rebound + '/?glb=' + encodeURIComponent(glbName));
+const stolen = await attacker.evaluate((p) => fetch(p).then(async (r) => r.status + ', ' + (await r.arrayBuffer()).byteLength + ' bytes'),
+  '/' + encodeURIComponent(glbName));
+check(rPage.status() === 403 && stolen.startsWith('403'),
+  `DNS rebinding: ${rebound} (resolving to 127.0.0.1) gets ${rPage.status()} for the page and ${stolen} for the model`);
+// From that foreign origin, a direct cross-origin fetch of the model cannot be read.
+const crossRead = await attacker.evaluate((u) => fetch(u).then((r) => r.arrayBuffer())
+  .then((b) => 'read ' + b.byteLength + ' bytes', (e) => 'refused: ' + e.message), new URL(url).origin + '/' + glbName);
+check(crossRead.startsWith('refused'), `another origin cannot read the model with fetch (${crossRead})`);
 await run.ctx.close();
 
 // file:// with the file picker, as opened straight from disk.
