@@ -51,25 +51,26 @@ pub fn read_text(path: &Path) -> Result<String> {
 }
 
 /// Checks, before any work, that the output folder `dir` given by flag `flag` can take new
-/// files: creates it (and its parents) when missing, then writes and removes a probe
-/// file. A run that would fail on its first write fails here instead, with nothing
-/// computed and nothing left behind but the (empty) folder.
+/// files, without creating anything: an existing folder must take a probe file (written
+/// and removed at once); a missing one needs its nearest existing ancestor to be a folder
+/// that takes one, so that the run can create it. A run that would fail on its first
+/// write fails here instead, with nothing computed and nothing left behind.
 ///
 /// # Errors
-/// [`Error::Input`] naming the flag and the path (exit 1): the path is a file, a parent
-/// is not a folder, or the folder cannot be created or written.
+/// [`Error::Input`] naming the flag and the path (exit 1): the path or an ancestor is a
+/// file, or the folder that would hold the output cannot be written.
 pub fn check_output_dir(flag: &str, dir: &Path) -> Result<()> {
     let refuse = |why: String| Error::arg(flag, dir.display(), why);
     if dir.exists() && !dir.is_dir() {
         return Err(refuse("exists and is not a folder".into()));
     }
-    std::fs::create_dir_all(dir).map_err(|e| refuse(format!("cannot create the folder: {e}")))?;
-    probe(dir).map_err(|e| refuse(format!("cannot write in the folder: {e}")))
+    writable_ancestor(dir).map_err(refuse)
 }
 
 /// Checks, before any work, that the output file `path` given by flag `flag` can be
-/// written: it is not a folder, and its folder exists (or can be created) and takes new
-/// files. The file itself is not touched, so an existing one is only replaced by the run.
+/// written: it is not a folder, and its folder exists and takes new files, or can be
+/// created (see [`check_output_dir`]). Nothing is created and the file is not touched, so
+/// an existing one is only replaced by the run.
 ///
 /// # Errors
 /// [`Error::Input`] naming the flag and the path (exit 1).
@@ -87,12 +88,27 @@ pub fn check_output_file(flag: &str, path: &Path) -> Result<()> {
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
-    if dir.exists() && !dir.is_dir() {
-        return Err(refuse(format!("{} is not a folder", dir.display())));
+    writable_ancestor(dir).map_err(refuse)
+}
+
+/// `Ok` when `dir` is a writable folder, or is missing and its nearest existing ancestor
+/// is one; otherwise why not.
+fn writable_ancestor(dir: &Path) -> std::result::Result<(), String> {
+    let mut at = dir;
+    loop {
+        if at.is_dir() {
+            return probe(at).map_err(|e| format!("cannot write in {}: {e}", at.display()));
+        }
+        if at.exists() {
+            return Err(format!("{} is not a folder", at.display()));
+        }
+        at = match at.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            // A relative path's top: the working folder, unless that is where we are.
+            _ if at != Path::new(".") => Path::new("."),
+            _ => return Err("the working folder is gone".into()),
+        };
     }
-    std::fs::create_dir_all(dir)
-        .map_err(|e| refuse(format!("cannot create its folder {}: {e}", dir.display())))?;
-    probe(dir).map_err(|e| refuse(format!("cannot write in {}: {e}", dir.display())))
 }
 
 /// Writes and removes a small file in `dir`: the only portable test of write permission
@@ -140,12 +156,15 @@ mod tests {
                 "{shown}"
             );
         }
-        // What is fine passes and leaves no probe behind.
+        // What is fine passes, creates nothing and leaves no probe behind.
         check_output_dir("--out", &dir.path().join("new/out")).unwrap();
         check_output_file("--gltf", &dir.path().join("g/x.glb")).unwrap();
         check_output_file("--gltf", &file).unwrap();
         assert_eq!(std::fs::read(&file).unwrap(), b"x");
-        let left: Vec<_> = std::fs::read_dir(dir.path().join("g")).unwrap().collect();
-        assert!(left.is_empty());
+        let left: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(left, [std::ffi::OsString::from("a.txt")]);
     }
 }

@@ -210,3 +210,19 @@ fn an_exr_within_the_limit_but_too_large_for_memory_exits_1_instead_of_aborting(
     std::fs::write(&p, &b).unwrap();
     refused_by_both_commands(&p, &["16384 x 16384", "not enough memory"]);
 }
+
+#[test]
+fn a_picture_that_reads_but_cannot_be_indexed_as_a_sky_exits_1_instead_of_aborting() {
+    // 4 096 × 4 096 reads in about 0.6 GB, but the sky's sub-sample index (9 sub-samples
+    // of 48 bytes a pixel while it is built) needs about 7 GB: more than `ulimit -v`
+    // leaves. Before the index was reserved fallibly, this aborted after the read.
+    let dir = tempfile::tempdir().unwrap();
+    let mut b = hdr_header("-Y 4096 +X 4096");
+    for _ in 0..4096 {
+        // The first pixel and old-style repeats of 255 and 15 × 256 of it.
+        b.extend_from_slice(&[128, 128, 128, 129, 1, 1, 1, 255, 1, 1, 1, 15]);
+    }
+    let p = dir.path().join("sky4k.hdr");
+    std::fs::write(&p, &b).unwrap();
+    refused_by_both_commands(&p, &["4096 x 4096", "not enough memory to index"]);
+}

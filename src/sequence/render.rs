@@ -534,6 +534,7 @@ pub fn run_render(
     if let Some(g) = &outputs.gltf {
         crate::files::check_output_file("--gltf", g)?;
     }
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let fingerprints: Vec<String> = frames
         .iter()
         .map(|f| frame_fingerprint(scene, quality, camera, outputs, f))

@@ -127,8 +127,17 @@ pub fn image_sky(
     if image.width == 0 || image.height == 0 {
         return Err(Error::input(path, None, None, "the image has no pixels"));
     }
+    let (w, h) = (image.width, image.height);
     let mut img =
-        sky::image::ImageSky::new(image.width, image.height, image.rgb, mapping, rotate_deg);
+        sky::image::ImageSky::try_new(w, h, image.rgb, mapping, rotate_deg).ok_or_else(|| {
+            Error::input(
+                path,
+                None,
+                Some(&format!("{w} x {h}")),
+                "not enough memory to index this sky image (about 400 bytes a pixel); \
+                 use a smaller picture",
+            )
+        })?;
     let mut warnings = Vec::new();
     let sun = match dni {
         Some(d) if !(d.is_finite() && d >= 0.0) => {

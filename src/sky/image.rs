@@ -76,6 +76,10 @@ fn bin_of(theta: f64, phi: f64) -> usize {
 impl ImageSky {
     /// The sky of a `width × height` image (`rgb` row-major from the top-left) in
     /// `mapping`, turned by `rotate_deg` clockwise.
+    ///
+    /// # Panics
+    /// When the sub-sample index (about 400 bytes a pixel) cannot be allocated; pictures a
+    /// user gives go through [`ImageSky::try_new`].
     pub fn new(
         width: usize,
         height: usize,
@@ -83,6 +87,20 @@ impl ImageSky {
         mapping: Mapping,
         rotate_deg: f64,
     ) -> ImageSky {
+        Self::try_new(width, height, rgb, mapping, rotate_deg)
+            .expect("memory for the image sky's sub-sample index")
+    }
+
+    /// [`ImageSky::new`], `None` when this machine cannot allocate the sub-sample index
+    /// (9 sub-samples of 48 bytes a pixel while it is built): a picture that was read
+    /// can still be too large to index, and that must be an error, not an abort.
+    pub fn try_new(
+        width: usize,
+        height: usize,
+        rgb: Vec<Rgb>,
+        mapping: Mapping,
+        rotate_deg: f64,
+    ) -> Option<ImageSky> {
         let mut sky = ImageSky {
             width,
             height,
@@ -92,8 +110,8 @@ impl ImageSky {
             samples: Vec::new(),
             bins: Vec::new(),
         };
-        sky.index();
-        sky
+        sky.index()?;
+        Some(sky)
     }
 
     /// Unit direction and solid-angle density (sr per unit image area, the image being
@@ -142,11 +160,17 @@ impl ImageSky {
         Some(row * self.width + col)
     }
 
-    /// The sub-sample index: every pixel's 3 × 3 sub-samples above the horizon.
-    fn index(&mut self) {
+    /// The sub-sample index: every pixel's 3 × 3 sub-samples above the horizon; `None`
+    /// when its memory cannot be reserved.
+    fn index(&mut self) -> Option<()> {
         let (w, h) = (self.width as f64, self.height as f64);
         let area = 1.0 / (w * h * (SUB * SUB) as f64);
+        let most = self
+            .width
+            .checked_mul(self.height)?
+            .checked_mul(SUB * SUB)?;
         let mut all: Vec<(usize, DVec3, u32, f64)> = Vec::new();
+        all.try_reserve_exact(most).ok()?;
         for row in 0..self.height {
             for col in 0..self.width {
                 for i in 0..SUB {
@@ -164,6 +188,11 @@ impl ImageSky {
                 }
             }
         }
+        // The stable sort keeps the sub-samples of a bin in image order (so sums are
+        // reproducible) and allocates half the vector as scratch: probe for that first.
+        let scratch =
+            (all.len() / 2).checked_mul(std::mem::size_of::<(usize, DVec3, u32, f64)>())?;
+        Vec::<u8>::new().try_reserve_exact(scratch).ok()?;
         all.sort_by_key(|s| s.0);
         let nb = n_theta() * n_phi();
         self.bins = vec![0; nb + 1];
@@ -173,7 +202,10 @@ impl ImageSky {
         for b in 0..nb {
             self.bins[b + 1] += self.bins[b];
         }
-        self.samples = all.into_iter().map(|(_, d, p, w)| (d, p, w)).collect();
+        self.samples.try_reserve_exact(all.len()).ok()?;
+        self.samples
+            .extend(all.into_iter().map(|(_, d, p, w)| (d, p, w)));
+        Some(())
     }
 
     /// Takes the sun out of the image: the saturated pixels above the horizon (grey value
