@@ -1,6 +1,7 @@
 //! L9 the command line, split the way ripgrep splits its own:
 //!
 //! - [`args`]: the raw clap structures — flags, defaults and help text, nothing more;
+//! - [`ranges`]: the range of every number a flag takes, and the value parsers holding them;
 //! - [`config`]: raw arguments turned into library values (quality preset, sky, cache,
 //!   metric thresholds, dates, shard, knobs), every refusal an [`crate::Error::Input`] naming the
 //!   flag and the value;
@@ -23,6 +24,7 @@ pub mod convergence;
 pub mod df;
 pub mod instant;
 pub mod merge;
+pub mod ranges;
 pub mod render;
 pub mod view;
 pub(crate) mod messages;
