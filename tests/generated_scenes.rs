@@ -139,8 +139,16 @@ fn office_room_is_closed_except_through_the_glazing() {
 #[test]
 fn building_hits_its_triangle_target() {
     for target in [200, 300, 600, 1_000, 3_000, 10_000, 25_000, 100_000] {
-        let s = multi_storey_building(target);
-        let n = s.input_triangles;
+        let b = multi_storey_builder(target);
+        let n = b.triangle_count();
+        let s = b.build("<building>").unwrap();
+        // The scene cuts floors, ceilings and walls where partitions and slabs stand on
+        // them: more triangles, never fewer.
+        assert!(
+            s.input_triangles > n,
+            "target {target}: {}",
+            s.input_triangles
+        );
         assert!(
             (n as f64 - target as f64).abs() <= 0.1 * target as f64,
             "target {target}: {n}"
@@ -334,4 +342,37 @@ fn bvh_timing_report() {
 #[ignore]
 fn write_bundled_office() {
     write_obj(&side_lit_office(), &bundled_dir(), "office").unwrap();
+}
+
+/// Writes the bench scene of issue 23 to `target/bench-building` (run explicitly with
+/// `--ignored`): [`corridor_building`]`(10_000)` as drawn (floors and ceilings one polygon
+/// under and over the walls: the scene cuts them when it reads the file), with the sensors
+/// of its second storey only, for `tests/bench/radiance/run.sh --scene
+/// target/bench-building/scene.toml`.
+#[test]
+#[ignore]
+fn write_corridor_building() {
+    let drawn = corridor_builder(10_000);
+    let mut s = corridor_building(10_000);
+    let origin = s.origin;
+    s.triangles = drawn
+        .triangles()
+        .iter()
+        .map(|t| Triangle {
+            v: t.v.map(|v| v - origin),
+            ..*t
+        })
+        .collect();
+    s.input_triangles = s.triangles.len();
+    s.sensors
+        .retain(|x| (x.input_position.z - (STOREY + 0.8)).abs() < 1e-6);
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/bench-building");
+    std::fs::create_dir_all(&dir).unwrap();
+    write_obj(&s, &dir, "building").unwrap();
+    println!(
+        "{} triangles as drawn, {} sensors, in {}",
+        s.input_triangles,
+        s.sensors.len(),
+        dir.display()
+    );
 }

@@ -3,6 +3,7 @@
 //! subtracted so far-from-origin models keep full precision.
 
 pub mod faces;
+pub mod junctions;
 pub mod material;
 pub mod obj;
 mod mtl;
@@ -94,6 +95,9 @@ pub struct Scene {
     /// Number of degenerate input triangles dropped (zero area, or an area too small or too
     /// large for `f64` to give a unit normal).
     pub dropped_degenerate: usize,
+    /// What cutting surfaces along the feet of walls standing on them did
+    /// ([`junctions::split_at_junctions`]).
+    pub junctions: junctions::JunctionReport,
     /// Non-fatal remarks about the input (unknown MTL keys, …), each once.
     pub warnings: Vec<String>,
 }
@@ -346,6 +350,8 @@ impl Scene {
                 }
             })
             .collect();
+        let (triangles, junctions) =
+            junctions::split_at_junctions(triangles, input.faces == Faces::Both);
         let mut sensors = Vec::with_capacity(input.sensors.len());
         for (k, (p, d)) in input.sensors.iter().enumerate() {
             if !p.is_finite() || !d.is_finite() || d.length_squared() == 0.0 {
@@ -391,6 +397,7 @@ impl Scene {
             north_deg: input.north_deg,
             y_up: false,
             dropped_degenerate: dropped,
+            junctions,
             warnings: Vec::new(),
         };
         if input.faces == Faces::Both {

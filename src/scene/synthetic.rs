@@ -405,6 +405,11 @@ impl SceneBuilder {
     pub fn triangle_count(&self) -> usize {
         self.triangles.len()
     }
+    /// The triangles added so far, model frame, as drawn (before [`Scene::from_model`]
+    /// cuts or drops any).
+    pub fn triangles(&self) -> &[Triangle] {
+        &self.triangles
+    }
     /// Sensors added so far.
     pub fn sensor_count(&self) -> usize {
         self.sensors.len()

@@ -88,6 +88,11 @@ pub struct Counts {
     pub sensor_rays: u64,
     /// Zero-area input triangles dropped.
     pub degenerate_triangles_dropped: usize,
+    /// Input triangles cut where walls stand on them, so that no mesh element spans a
+    /// wall's foot.
+    pub junction_triangles_cut: usize,
+    /// Triangles added by those cuts (included in `elements_before`).
+    pub junction_triangles_added: usize,
     /// Interreflection operators read from the cache instead of built.
     pub operators_reused: usize,
 }

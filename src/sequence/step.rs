@@ -570,6 +570,8 @@ impl<'a> Engine<'a> {
             back_faces: scene.triangles.len() - scene.input_triangles,
             sensors: scene.sensors.len(),
             degenerate_triangles_dropped: scene.dropped_degenerate,
+            junction_triangles_cut: scene.junctions.cut,
+            junction_triangles_added: scene.junctions.added,
             operators_reused: usize::from(self.operator.is_some() && self.operator_from_cache),
             ..Counts::default()
         };

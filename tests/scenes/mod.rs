@@ -190,7 +190,8 @@ pub fn side_lit_office() -> Scene {
 
 // Layout constants of [`multi_storey_building`], m.
 const BAY: f64 = 3.0;
-const STOREY: f64 = 3.5;
+/// Storey height of [`multi_storey_building`] (floor to floor), m.
+pub const STOREY: f64 = 3.5;
 /// Clear height of a storey of [`multi_storey_building`] (floor to ceiling), m.
 pub const CLEAR: f64 = 3.2;
 const WALL: f64 = 0.2;
@@ -210,6 +211,27 @@ pub fn building_base_triangles(floors: usize, nx: usize, ny: usize) -> usize {
 /// Adds the building of `floors` storeys on `nx` × `ny` bays with `desks[i]` desks on floor
 /// i (see [`multi_storey_building`]).
 pub fn add_building(b: &mut SceneBuilder, floors: usize, nx: usize, ny: usize, desks: &[usize]) {
+    add_building_with(b, floors, nx, ny, desks, false);
+}
+
+/// Width of the doors from the rooms into the corridor of [`corridor_building`], m.
+pub const DOOR_W: f64 = 0.9;
+/// Height of those doors, m.
+pub const DOOR_H: f64 = 2.1;
+
+/// [`add_building`], and with `corridor_walls` the corridor closed off from the rooms by
+/// 0.1 m walls on both sides, each room (between two partitions) opening onto it by one
+/// 0.9 m × 2.1 m door in its middle: the corridor is then lit only through doors. The
+/// floors and ceilings stay one polygon per storey under and over every wall, as
+/// modellers draw them.
+pub fn add_building_with(
+    b: &mut SceneBuilder,
+    floors: usize,
+    nx: usize,
+    ny: usize,
+    desks: &[usize],
+    corridor_walls: bool,
+) {
     let [floor, wall, ceiling, exterior, ground] = add_office_palette(b);
     let partition = b.add_opaque("partition", 0.6);
     let furniture = b.add_opaque("furniture", 0.4);
@@ -260,15 +282,33 @@ pub fn add_building(b: &mut SceneBuilder, floors: usize, nx: usize, ny: usize, d
         // three faces (the end against the wall and top/bottom are hidden).
         for k in 1..=(nx - 1) / 2 {
             let x = 2.0 * k as f64 * BAY;
-            for (y0, y1, open_end) in [(0.0, 0.4 * d, Face::North), (0.6 * d, d, Face::South)] {
+            // With corridor walls, partitions end at the walls' faces (and their ends are
+            // hidden against them).
+            let c = if corridor_walls { 0.05 } else { 0.0 };
+            for (y0, y1, open_end) in [
+                (0.0, 0.4 * d - c, Face::North),
+                (0.6 * d + c, d, Face::South),
+            ] {
                 let plo = DVec3::new(x - 0.05, y0, z0);
                 let phi = DVec3::new(x + 0.05, y1, z0 + CLEAR);
                 let mut m = [None; 6];
                 m[Face::West as usize] = Some(partition);
                 m[Face::East as usize] = Some(partition);
-                m[open_end as usize] = Some(partition);
+                if !corridor_walls {
+                    m[open_end as usize] = Some(partition);
+                }
                 b.add_shell("partitions", plo, phi, false, m, &[]);
                 obstacles.push((plo, phi));
+            }
+        }
+        if corridor_walls {
+            let doors: Vec<f64> = room_spans(nx).map(|(x0, x1)| 0.5 * (x0 + x1)).collect();
+            for y in [0.4 * d, 0.6 * d] {
+                add_wall_with_doors(b, partition, y, 0.0, w, z0, &doors);
+                obstacles.push((
+                    DVec3::new(0.0, y - 0.05, z0),
+                    DVec3::new(w, y + 0.05, z0 + CLEAR),
+                ));
             }
         }
         // Desks (1.4 × 0.6 × 0.75 m, no bottom face): two slots per bay cell, filled
@@ -324,6 +364,81 @@ pub fn add_building(b: &mut SceneBuilder, floors: usize, nx: usize, ny: usize, d
     }
 }
 
+/// The x ranges (m) of the rooms between partitions of a building `nx` bays wide (see
+/// [`add_building`]: partitions every second bay line).
+fn room_spans(nx: usize) -> impl Iterator<Item = (f64, f64)> {
+    let w = nx as f64 * BAY;
+    let mut cuts: Vec<f64> = (1..=(nx - 1) / 2).map(|k| 2.0 * k as f64 * BAY).collect();
+    cuts.insert(0, 0.0);
+    cuts.push(w);
+    (0..cuts.len() - 1).map(move |k| (cuts[k], cuts[k + 1]))
+}
+
+/// A 0.1 m wall across the building at `y` (x from `x0` to `x1`, storey at `z0`, clear
+/// height), its two faces with a [`DOOR_W`] × [`DOOR_H`] door centred at each of `doors`
+/// (x, m), and jambs and head lining each door (no sill: the floor runs through).
+fn add_wall_with_doors(
+    b: &mut SceneBuilder,
+    material: u32,
+    y: f64,
+    x0: f64,
+    x1: f64,
+    z0: f64,
+    doors: &[f64],
+) {
+    let holes: Vec<Rect> = doors
+        .iter()
+        .map(|x| Rect::new([x - 0.5 * DOOR_W, x + 0.5 * DOOR_W], [z0, z0 + DOOR_H]))
+        .collect();
+    let whole = Rect::new([x0, x1], [z0, z0 + CLEAR]);
+    let (ys, yn) = (y - 0.05, y + 0.05);
+    b.add_rect_with_holes("corridor walls", material, Face::South, ys, whole, &holes);
+    b.add_rect_with_holes("corridor walls", material, Face::North, yn, whole, &holes);
+    for h in &holes {
+        // Jambs face into the opening; the head faces down.
+        b.add_rect(
+            "corridor walls",
+            material,
+            Face::East,
+            h.a[0],
+            Rect::new([ys, yn], h.b),
+        );
+        b.add_rect(
+            "corridor walls",
+            material,
+            Face::West,
+            h.a[1],
+            Rect::new([ys, yn], h.b),
+        );
+        b.add_rect(
+            "corridor walls",
+            material,
+            Face::Bottom,
+            h.b[1],
+            Rect::new(h.a, [ys, yn]),
+        );
+    }
+}
+
+/// [`multi_storey_building`] with its corridors walled off from the rooms, lit only
+/// through one door per room ([`add_building_with`]); sensors as there, those inside
+/// the new walls left out. The bench scene of issue 23.
+pub fn corridor_building(target_triangles: usize) -> Scene {
+    corridor_builder(target_triangles)
+        .build(&format!("<synthetic corridor_building {target_triangles}>"))
+        .expect("the generated building is valid input")
+}
+
+/// [`corridor_building`] as a builder (the model as drawn).
+pub fn corridor_builder(target_triangles: usize) -> SceneBuilder {
+    let (floors, nx, ny, desks) = building_plan(target_triangles);
+    let mut b = SceneBuilder::new();
+    add_building_with(&mut b, floors, nx, ny, &desks, true);
+    b.set_site(greensboro());
+    b.set_ground_reflectance(0.2);
+    b
+}
+
 /// A generated office building for benchmarks: storeys of 3.5 m (3.2 m clear, 0.3 m
 /// slabs) on a grid of 3 m bays, one glazed 1.8 m × 1.5 m window per bay on all four façades
 /// (lined reveals, mid-wall glazing), 0.2 m walls with inner and outer faces, partitions,
@@ -332,6 +447,27 @@ pub fn add_building(b: &mut SceneBuilder, floors: usize, nx: usize, ny: usize, d
 /// of 200 and above (the smallest building has 176). Sensors face up 0.8 m above every
 /// floor on a 2.4 m grid (1 620 for 10 000 triangles). Deterministic. Site Greensboro NC.
 pub fn multi_storey_building(target_triangles: usize) -> Scene {
+    multi_storey_builder(target_triangles)
+        .build(&format!(
+            "<synthetic multi_storey_building {target_triangles}>"
+        ))
+        .expect("the generated building is valid input")
+}
+
+/// [`multi_storey_building`] as a builder: the model as a modeller would export it, with
+/// `target_triangles` counted before the scene cuts surfaces where walls stand on them.
+pub fn multi_storey_builder(target_triangles: usize) -> SceneBuilder {
+    let (floors, nx, ny, desks) = building_plan(target_triangles);
+    let mut b = SceneBuilder::new();
+    add_building(&mut b, floors, nx, ny, &desks);
+    b.set_site(greensboro());
+    b.set_ground_reflectance(0.2);
+    b
+}
+
+/// Floors, bays (x, y) and desks per floor of [`multi_storey_building`] for a triangle
+/// target.
+fn building_plan(target_triangles: usize) -> (usize, usize, usize, Vec<usize>) {
     let target = target_triangles.max(1);
     let mut floors = ((target as f64).sqrt() / 10.0).round().clamp(1.0, 50.0) as usize;
     // Small targets: fewer floors, so that the smallest plan (2 × 2 bays) still fits.
@@ -356,14 +492,7 @@ pub fn multi_storey_building(target_triangles: usize) -> Scene {
     let desks: Vec<usize> = (0..floors)
         .map(|i| total_desks / floors + usize::from(i < total_desks % floors))
         .collect();
-    let mut b = SceneBuilder::new();
-    add_building(&mut b, floors, nx, ny, &desks);
-    b.set_site(greensboro());
-    b.set_ground_reflectance(0.2);
-    b.build(&format!(
-        "<synthetic multi_storey_building {target_triangles}>"
-    ))
-    .expect("the generated building is valid input")
+    (floors, nx, ny, desks)
 }
 
 /// Formats a model-frame coordinate: values within rounding of a multiple of 1e-9 m are
