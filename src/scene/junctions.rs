@@ -9,8 +9,9 @@
 //!
 //! [`split_at_junctions`] cuts every triangle along the line of each tall triangle edge
 //! that lies in its plane and crosses its interior, before any meshing, so no element
-//! spans a junction. Low objects (desks, sills, skirtings) do not cut: they shade the
-//! surface but do not divide space into parts lit differently.
+//! spans a junction. Low objects (desks, sills, skirtings) and short ones (a door's jambs,
+//! table legs) do not cut: they shade the surface but do not divide space into parts lit
+//! differently.
 
 use super::Triangle;
 use glam::DVec3;
@@ -20,6 +21,11 @@ use rstar::{RTree, RTreeObject, AABB};
 /// How far (m) a standing triangle must reach out of a surface's plane for its foot to cut
 /// that surface: above desk and sill height, below any storey's clear height.
 pub const TALL_M: f64 = 1.0;
+
+/// Shortest wall (m) whose foot cuts: the feet on one line are summed (a wall drawn as many
+/// small triangles, or interrupted by doors, counts whole). A door's jambs (a wall's
+/// thickness each) and a table's legs do not cut.
+pub const MIN_FOOT_M: f64 = 1.0;
 
 /// How far (m) an edge may sit off a surface's plane and still stand on it: modelling
 /// tolerance of exported models (Rhino's default absolute tolerance is 1 mm).
@@ -114,6 +120,7 @@ pub fn split_at_junctions(
         .collect();
     // Per surface, in the order of the standing triangles: deterministic.
     cuts.sort_by_key(|c| c.surface);
+    let cuts = long_feet(cuts, &normals);
     let mut out = Vec::with_capacity(triangles.len() + 2 * cuts.len());
     let mut report = JunctionReport::default();
     let mut next = 0;
@@ -126,13 +133,25 @@ pub fn split_at_junctions(
             out.push(*t);
             continue;
         }
-        let mut pieces = vec![*t];
+        // Convex polygons, cut whole and triangulated at the end: k parallel feet make
+        // k + 1 cells, not the fans of fans that cutting triangles would.
+        let mut cells: Vec<Vec<DVec3>> = vec![t.v.to_vec()];
         for c in &cuts[start..next] {
-            pieces = pieces
+            cells = cells
                 .into_iter()
-                .flat_map(|p| cut_piece(p, normals[i], c.a, c.b))
+                .flat_map(|p| cut_cell(p, normals[i], c.a, c.b))
                 .collect();
         }
+        let pieces: Vec<Triangle> = cells
+            .iter()
+            .flat_map(|poly| {
+                (1..poly.len() - 1).map(|k| Triangle {
+                    v: [poly[0], poly[k], poly[k + 1]],
+                    ..*t
+                })
+            })
+            .filter(|p| p.cross().length_squared().is_normal())
+            .collect();
         if pieces.len() > 1 {
             report.cut += 1;
             report.added += pieces.len() - 1;
@@ -142,40 +161,70 @@ pub fn split_at_junctions(
     (out, report)
 }
 
+/// The cuts whose line holds at least [`MIN_FOOT_M`] of feet on their surface (`cuts`
+/// sorted by surface; order kept).
+fn long_feet(cuts: Vec<Cut>, normals: &[DVec3]) -> Vec<Cut> {
+    let mut keep = vec![false; cuts.len()];
+    let mut start = 0;
+    while start < cuts.len() {
+        let s = cuts[start].surface;
+        let mut end = start;
+        while end < cuts.len() && cuts[end].surface == s {
+            end += 1;
+        }
+        let group = &cuts[start..end];
+        let n = normals[s as usize];
+        for (k, f) in group.iter().enumerate() {
+            let m = n.cross(f.b - f.a).normalize_or_zero();
+            let on = |p: DVec3| m.dot(p - f.a).abs() <= ON_PLANE_M;
+            let total: f64 = group
+                .iter()
+                .filter(|g| on(g.a) && on(g.b))
+                .map(|g| (g.b - g.a).length())
+                .sum();
+            keep[start + k] = total >= MIN_FOOT_M;
+        }
+        start = end;
+    }
+    cuts.into_iter()
+        .zip(keep)
+        .filter_map(|(c, k)| k.then_some(c))
+        .collect()
+}
+
 /// Distance (m) below which a vertex counts as on the cutting line: no sliver thinner than
 /// this is made.
 const ON_LINE_M: f64 = 1e-6;
 
-/// `piece` cut by the line through the foot `a`–`b` (in the piece's plane, normal `n`),
-/// when the foot crosses the piece's interior; else the piece unchanged. Pieces are convex
-/// polygons from the piece's own cyclic vertex order, fan-triangulated, so the winding is
-/// kept.
-fn cut_piece(piece: Triangle, n: DVec3, a: DVec3, b: DVec3) -> Vec<Triangle> {
-    let d = b - a;
-    let m = n.cross(d);
+/// The convex polygon `cell` (counter-clockwise about `n`) cut by the line through the foot
+/// `a`–`b` when the foot crosses its interior: the two convex halves, in the cell's own
+/// cyclic order; else the cell unchanged.
+fn cut_cell(cell: Vec<DVec3>, n: DVec3, a: DVec3, b: DVec3) -> Vec<Vec<DVec3>> {
+    let m = n.cross(b - a);
     let len = m.length();
     if len <= ON_LINE_M {
-        return vec![piece];
+        return vec![cell];
     }
     let m = m / len;
-    let s = piece.v.map(|v| {
-        let s = m.dot(v - a);
-        if s.abs() <= ON_LINE_M {
-            0.0
-        } else {
-            s
-        }
-    });
-    if !(s.iter().any(|x| *x > 0.0) && s.iter().any(|x| *x < 0.0)) {
-        return vec![piece];
+    let s: Vec<f64> = cell
+        .iter()
+        .map(|v| {
+            let s = m.dot(*v - a);
+            if s.abs() <= ON_LINE_M {
+                0.0
+            } else {
+                s
+            }
+        })
+        .collect();
+    let straddles = s.iter().any(|x| *x > 0.0) && s.iter().any(|x| *x < 0.0);
+    if !straddles || !foot_crosses(&cell, n, a, b) {
+        return vec![cell];
     }
-    if !foot_crosses(&piece, n, a, b) {
-        return vec![piece];
-    }
-    let (mut plus, mut minus) = (Vec::with_capacity(4), Vec::with_capacity(4));
-    for k in 0..3 {
-        let (p, q) = (piece.v[k], piece.v[(k + 1) % 3]);
-        let (sp, sq) = (s[k], s[(k + 1) % 3]);
+    let (mut plus, mut minus) = (Vec::new(), Vec::new());
+    for k in 0..cell.len() {
+        let l = (k + 1) % cell.len();
+        let (p, q, sp, sq) = (cell[k], cell[l], s[k], s[l]);
         if sp >= 0.0 {
             plus.push(p);
         }
@@ -188,19 +237,7 @@ fn cut_piece(piece: Triangle, n: DVec3, a: DVec3, b: DVec3) -> Vec<Triangle> {
             minus.push(x);
         }
     }
-    let mut out = Vec::with_capacity(3);
-    for poly in [plus, minus] {
-        for k in 1..poly.len().saturating_sub(1) {
-            let t = Triangle {
-                v: [poly[0], poly[k], poly[k + 1]],
-                ..piece
-            };
-            if t.cross().length_squared().is_normal() {
-                out.push(t);
-            }
-        }
-    }
-    out
+    vec![plus, minus]
 }
 
 /// Where the line crosses edge `p`–`q` (signed distances `sp`, `sq`), computed from the
@@ -216,13 +253,13 @@ fn crossing(p: DVec3, sp: f64, q: DVec3, sq: f64) -> DVec3 {
     p + (q - p) * t
 }
 
-/// Whether the foot `a`–`b` runs through the piece's interior for more than [`ON_LINE_M`]
-/// (a wall ending at a piece's edge, or beside it, does not cut it).
-fn foot_crosses(piece: &Triangle, n: DVec3, a: DVec3, b: DVec3) -> bool {
+/// Whether the foot `a`–`b` runs through the convex cell's interior for more than
+/// [`ON_LINE_M`] (a wall ending at a cell's edge, or beside it, does not cut it).
+fn foot_crosses(cell: &[DVec3], n: DVec3, a: DVec3, b: DVec3) -> bool {
     let d = b - a;
     let (mut t0, mut t1) = (0.0f64, 1.0f64);
-    for k in 0..3 {
-        let (p, q) = (piece.v[k], piece.v[(k + 1) % 3]);
+    for k in 0..cell.len() {
+        let (p, q) = (cell[k], cell[(k + 1) % cell.len()]);
         // Inward normal of the edge, for a counter-clockwise piece about `n`.
         let inward = n.cross(q - p).normalize();
         let (f, g) = (inward.dot(a - p), inward.dot(d));

@@ -82,6 +82,7 @@ fn low_objects_walls_beside_and_walls_along_an_edge_do_not_cut() {
         wall(5.0, 0.0, 3.0, 0.0, 3.0),  // beside the floor
         wall(4.0, 0.0, 4.0, 0.0, 3.0),  // along the floor's edge
         wall(1.5, 0.0, 3.0, 0.01, 3.0), // floating 1 cm above it
+        wall(1.5, 1.0, 1.4, 0.0, 2.1),  // a door's jamb
     ] {
         let mut input = floor();
         input.extend(standing.iter().copied());
@@ -150,4 +151,21 @@ fn a_slab_cuts_a_facade_drawn_as_one_polygon() {
         assert!(below || above, "{p:?}");
     }
     assert!((area(&out[..out.len() - 1]) - 42.0).abs() < 1e-12);
+}
+
+#[test]
+fn short_feet_on_one_line_add_up_to_a_wall() {
+    // A wall drawn as four 0.3 m strips on one line cuts; one strip alone does not.
+    let mut input = floor();
+    for k in 0..4 {
+        let y = 0.5 + 0.3 * k as f64;
+        input.extend(wall(1.5, y, y + 0.3, 0.0, 3.0));
+    }
+    let (out, report) = split_at_junctions(input, false);
+    assert!(report.added > 0);
+    for p in floor_pieces(&out) {
+        let left = p.v.iter().all(|v| v.x <= 1.5 + 1e-12);
+        let right = p.v.iter().all(|v| v.x >= 1.5 - 1e-12);
+        assert!(left || right, "{p:?}");
+    }
 }
