@@ -4,8 +4,7 @@
 //! one polygon and meet it with slabs. The transport meshes each input triangle by
 //! quadtree, so an element of such a floor straddles the partition: its one radiosity
 //! averages the bright room and the dark corridor, and light leaks through the wall's foot
-//! in both directions. On the generated corridor scene (`tests/bias.rs`) this read the
-//! corridor 45–65 % high at low line counts. Radiance has no mesh and no such error.
+//! in both directions. Radiance has no mesh and no such error.
 //!
 //! [`split_at_junctions`] cuts every triangle along the line of each tall triangle edge
 //! that lies in its plane and crosses its interior, before any meshing, so no element
