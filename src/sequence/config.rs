@@ -128,6 +128,7 @@ impl Quality {
                     min_solid_angle_sr: 5e-4,
                     max_irradiance_fraction: 0.004,
                     ground_depth: 2,
+                    ground_horizon_depth: 4,
                     ..base.sky
                 },
                 sun_spacing_deg: 0.1,
@@ -159,6 +160,7 @@ impl Quality {
                     min_solid_angle_sr: 1e-4,
                     max_irradiance_fraction: 0.001,
                     ground_depth: 3,
+                    ground_horizon_depth: 5,
                     ..base.sky
                 },
                 sun_spacing_deg: 0.05,

@@ -24,6 +24,13 @@ pub struct SkyParams {
     pub max_irradiance_fraction: f64,
     /// Depth of the uniform ground-glow faces below the horizon.
     pub ground_depth: u32,
+    /// Depth the ground-glow faces touching the horizon are split to (at least
+    /// `ground_depth`). Glow from just below the horizon enters windows nearly level and
+    /// lands on ceilings far inside, and where it lands moves fast with its angle there
+    /// (a window head h above the ceiling's point reaches h / tan e), so a coarse face's
+    /// steep centroid direction keeps it near the façade: deep rooms and corridors behind
+    /// doors read low. Not in the paper; see docs/design.md.
+    pub ground_horizon_depth: u32,
     /// Also split while the spread of a node's radiance samples times its solid angle,
     /// (L_max − L_min)·ω, exceeds this fraction of the whole sky's ∫L dω: steep gradients
     /// near the horizon and around the sun make L̂ a poor average otherwise, and the
@@ -41,6 +48,7 @@ impl Default for SkyParams {
             min_solid_angle_sr: 2e-3,
             max_irradiance_fraction: 0.01,
             ground_depth: 1,
+            ground_horizon_depth: 3,
             max_variation: 0.002,
             negligible_fraction: 1e-7,
         }
@@ -56,6 +64,7 @@ impl SkyParams {
             min_solid_angle_sr: self.min_solid_angle_sr * 4.0,
             max_irradiance_fraction: self.max_irradiance_fraction * 4.0,
             ground_depth: self.ground_depth.saturating_sub(1),
+            ground_horizon_depth: self.ground_horizon_depth.saturating_sub(1),
             max_variation: self.max_variation * 2.0,
             negligible_fraction: self.negligible_fraction,
         }
@@ -166,7 +175,9 @@ pub fn sky_sources(sky: &Sky, params: &SkyParams) -> SkySources {
                     && (grey(l) * omega > params.max_irradiance_fraction * reference
                         || variation * omega > params.max_variation * reference))
         } else {
-            depth < params.ground_depth && grey(l) > 0.0
+            grey(l) > 0.0
+                && (depth < params.ground_depth
+                    || (depth < params.ground_horizon_depth && touches_horizon(&v)))
         };
         if split {
             for k in (0..4).rev() {
@@ -181,6 +192,12 @@ pub fn sky_sources(sky: &Sky, params: &SkyParams) -> SkySources {
         out.sources.push(make_source(key, v, l, children));
     }
     out
+}
+
+/// True when a ground node has a vertex on the horizon (midpoint splits put those
+/// vertices at z = 0 exactly, up to rounding).
+fn touches_horizon(v: &[DVec3; 3]) -> bool {
+    v.iter().any(|p| p.z.abs() < 1e-9)
 }
 
 /// The sun as a parallel source snapped to the grid of spacing `spacing_deg`, or `None`
