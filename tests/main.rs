@@ -4,6 +4,7 @@ mod scenes; // the generated office and building, shared with the benches
 mod util; // scene builders in code, closed-form helpers, assert helpers
 
 mod annual; // annual runs: resume after Ctrl-C and a cut line, shards merged (also 4 processes at once), a day vs cold instants
+mod bias; // ground glow deep inside (behind a door) against an independent path tracer
 mod cache; // projection cache: round trips, bad files rebuilt, eviction, concurrent writers (nothing lost or duplicated), CLI
 mod cache_runs; // the cache in whole runs: warm = cold, Kd/site/weather hit, vertex misses, damage, 4 processes
 mod coefficients; // daylight coefficients against forward solves: sky part, sun interpolation, coverage
