@@ -11,6 +11,7 @@
 //! rows in memory.
 
 pub mod gltf;
+pub mod grids;
 pub mod plot;
 pub mod viewer;
 
@@ -463,9 +464,11 @@ pub fn write_ill(path: &Path, times: &[NaiveDateTime], rows: &[Vec<f64>]) -> Res
 
 /// `metrics.csv` text: header `sensor,da,cda,udi_below,udi_within,udi_above,ase_hours,mean_lux`
 /// and one row per sensor named `s0, s1, …` as in `illuminance.csv` (percentages, hours,
-/// lux; three decimals).
-pub fn metrics_csv_text(per_sensor: &[SensorMetrics]) -> String {
-    let mut s = String::from("sensor,da,cda,udi_below,udi_within,udi_above,ase_hours,mean_lux\n");
+/// lux; three decimals). With `grid` (one entry per sensor, [`grids::grid_column`]), a last
+/// column `grid` holds each sensor's grid identifier (empty for none).
+pub fn metrics_csv_text(per_sensor: &[SensorMetrics], grid: Option<&[Option<&str>]>) -> String {
+    let mut s = String::from("sensor,da,cda,udi_below,udi_within,udi_above,ase_hours,mean_lux");
+    s.push_str(if grid.is_some() { ",grid\n" } else { "\n" });
     for (i, m) in per_sensor.iter().enumerate() {
         let values = [
             m.da,
@@ -481,6 +484,10 @@ pub fn metrics_csv_text(per_sensor: &[SensorMetrics]) -> String {
             s.push(',');
             s.push_str(&format_value(v));
         }
+        if let Some(g) = grid {
+            s.push(',');
+            s.push_str(g.get(i).copied().flatten().unwrap_or(""));
+        }
         s.push('\n');
     }
     s
@@ -490,8 +497,12 @@ pub fn metrics_csv_text(per_sensor: &[SensorMetrics]) -> String {
 ///
 /// # Errors
 /// [`Error::Io`].
-pub fn write_metrics_csv(path: &Path, per_sensor: &[SensorMetrics]) -> Result<()> {
-    files::write_atomic(path, metrics_csv_text(per_sensor).as_bytes())
+pub fn write_metrics_csv(
+    path: &Path,
+    per_sensor: &[SensorMetrics],
+    grid: Option<&[Option<&str>]>,
+) -> Result<()> {
+    files::write_atomic(path, metrics_csv_text(per_sensor, grid).as_bytes())
 }
 
 /// The `summary.json` document: `summary`, the `params` used and one-line `definitions` of
@@ -527,8 +538,16 @@ pub fn summary_json_value(summary: &Summary, params: &MetricParams) -> serde_jso
 /// # Errors
 /// [`Error::Io`]; [`Error::Internal`] if serialisation fails.
 pub fn write_summary_json(path: &Path, summary: &Summary, params: &MetricParams) -> Result<()> {
-    let mut text = serde_json::to_string_pretty(&summary_json_value(summary, params))
-        .map_err(|e| Error::Internal(format!("summary.json: {e}")))?;
+    write_json(path, &summary_json_value(summary, params))
+}
+
+/// Writes a JSON document to `path` atomically (pretty, final newline).
+///
+/// # Errors
+/// [`Error::Io`]; [`Error::Internal`] if serialisation fails.
+pub fn write_json(path: &Path, doc: &serde_json::Value) -> Result<()> {
+    let mut text = serde_json::to_string_pretty(doc)
+        .map_err(|e| Error::Internal(format!("{}: {e}", path.display())))?;
     text.push('\n');
     files::write_atomic(path, text.as_bytes())
 }

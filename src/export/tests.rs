@@ -138,7 +138,7 @@ fn metrics_csv_rows_per_sensor() {
         occupied_hours: 10.0,
     };
     assert_eq!(
-        metrics_csv_text(&[m.clone(), m]),
+        metrics_csv_text(&[m.clone(), m], None),
         "sensor,da,cda,udi_below,udi_within,udi_above,ase_hours,mean_lux\n\
          s0,40.000,33.333,30.000,60.000,10.000,1.000,754.990\n\
          s1,40.000,33.333,30.000,60.000,10.000,1.000,754.990\n"

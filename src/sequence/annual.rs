@@ -402,6 +402,9 @@ pub fn run_annual(
                 let (times, rows) = export::read_illuminance_csv(&out.join("illuminance.csv"))?;
                 let times = parse_times(&times)?;
                 export::write_ill(&out.join("illuminance.ill"), &times, &rows)?;
+                if let Some(g) = export::grids::read_grids_json(out, scene.sensors.len())? {
+                    export::grids::write_grid_ills(out, &g, &times, &rows)?;
+                }
             }
             report
                 .stage_seconds
@@ -475,9 +478,32 @@ pub fn write_metrics(out: &Path, step_minutes: u32, params: &MetricParams) -> Re
             )
         })
         .collect();
-    export::write_metrics_csv(&out.join("metrics.csv"), &per)?;
+    let grids = export::grids::read_grids_json(out, sensors)?;
+    let column = grids
+        .as_deref()
+        .map(|g| export::grids::grid_column(g, sensors));
+    export::write_metrics_csv(&out.join("metrics.csv"), &per, column.as_deref())?;
     let summary = metrics::summary(&per, None, params)?;
-    export::write_summary_json(&out.join("summary.json"), &summary, params)
+    let mut doc = export::summary_json_value(&summary, params);
+    if let Some(grids) = &grids {
+        // The same summary over each grid's and each room's sensors.
+        let of = |ks: &[usize]| -> Result<serde_json::Value> {
+            let sub: Vec<_> = ks.iter().map(|&k| per[k].clone()).collect();
+            let s = metrics::summary(&sub, None, params)?;
+            serde_json::to_value(s).map_err(|e| Error::Internal(format!("summary.json: {e}")))
+        };
+        let mut by_grid = serde_json::Map::new();
+        for g in grids {
+            by_grid.insert(g.identifier.clone(), of(&g.sensors)?);
+        }
+        let mut by_room = serde_json::Map::new();
+        for (room, ks) in export::grids::rooms(grids) {
+            by_room.insert(room, of(&ks)?);
+        }
+        doc["grids"] = by_grid.into();
+        doc["rooms"] = by_room.into();
+    }
+    export::write_json(&out.join("summary.json"), &doc)
 }
 
 /// Merges shard folders into `out` (the same files a single run writes) and computes the
@@ -501,7 +527,44 @@ pub fn merge(
         }
         export::merge_illuminance(&files, &out.join(f))?;
     }
+    merge_grids(parts, out)?;
     write_metrics(out, step_minutes, params)
+}
+
+/// Carries the shards' `grids.json` over to the merge: every shard of one study has the
+/// same sensors and so the same grids, which is checked.
+fn merge_grids(parts: &[std::path::PathBuf], out: &Path) -> Result<()> {
+    let mut first: Option<(std::path::PathBuf, String)> = None;
+    for p in parts {
+        let path = p.join(export::grids::GRIDS_JSON);
+        let text = if path.exists() {
+            crate::files::read_text(&path)?
+        } else {
+            String::new()
+        };
+        match &first {
+            None => first = Some((path, text)),
+            Some((f, t)) if *t != text => {
+                return Err(Error::input(
+                    &path,
+                    None,
+                    None,
+                    format!(
+                        "the sensor grids differ from {}'s: the folders are not shards of one \
+                         study",
+                        f.display()
+                    ),
+                ))
+            }
+            Some(_) => {}
+        }
+    }
+    match first {
+        Some((_, t)) if !t.is_empty() => {
+            crate::files::write_atomic(&out.join(export::grids::GRIDS_JSON), t.as_bytes())
+        }
+        _ => Ok(()),
+    }
 }
 
 /// Every shard k/n of one study must be given once: a missing shard whose days are only

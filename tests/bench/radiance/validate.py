@@ -744,6 +744,26 @@ def summary(ds, ref, ref_ind, groups, ref_noise):
     print()
 
 
+def instant_specs(lat, lon, tz, rho_g):
+    """The two bench instants: (key, title, Radiance sky command, daystep arguments)."""
+    # Radiance longitude is west-positive, the meridian too.
+    ro, rm = -lon, -15.0 * tz
+    site_opts = ["-a", f"{lat}", "-o", f"{ro}", "-m", f"{rm:g}"]
+    return [
+        ("perez", "Perez sky with sun, 2024-03-21 11:30 LST, DNI 978, DHI 86 W/m²",
+         ["gendaylit", "3", "21", "11.5", "-y", "2024"] + site_opts
+         + ["-W", "978", "86", "-g", f"{rho_g}"],
+         ["--time", "2024-03-21T11:30", "--sky", "perez", "--dni", "978", "--dhi", "86",
+          # gendaylit uses 2 cm of precipitable water; W = exp(0.07 Td - 0.075) = 2 cm at
+          # Td = 10.974 °C (daystep's default, 11 °C, gives 2.004 cm).
+          "--dew-point", "10.974"]),
+        ("overcast", "CIE overcast, 2024-03-21 12:00 LST, DHI 100 W/m² (17 900 lx horizontal)",
+         ["gensky", "3", "21", "12", "-y", "2024", "-c", "-B", "100"] + site_opts
+         + ["-g", f"{rho_g}"],
+         ["--time", "2024-03-21T12:00", "--sky", "cie-overcast", "--dhi", "100"]),
+    ]
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--daystep", default=str(REPO / "target/release/daystep"))
@@ -825,22 +845,7 @@ def main():
             print(f"  {name}: Tf {m['tf'][0]} -> Radiance glass transmissivity {t[0]:.4f}")
     print()
 
-    # Radiance longitude is west-positive, the meridian too.
-    ro, rm = -lon, -15.0 * tz
-    site_opts = ["-a", f"{lat}", "-o", f"{ro}", "-m", f"{rm:g}"]
-    instants = [
-        ("perez", "Perez sky with sun, 2024-03-21 11:30 LST, DNI 978, DHI 86 W/m²",
-         ["gendaylit", "3", "21", "11.5", "-y", "2024"] + site_opts
-         + ["-W", "978", "86", "-g", f"{rho_g}"],
-         ["--time", "2024-03-21T11:30", "--sky", "perez", "--dni", "978", "--dhi", "86",
-          # gendaylit uses 2 cm of precipitable water; W = exp(0.07 Td - 0.075) = 2 cm at
-          # Td = 10.974 °C (daystep's default, 11 °C, gives 2.004 cm).
-          "--dew-point", "10.974"]),
-        ("overcast", "CIE overcast, 2024-03-21 12:00 LST, DHI 100 W/m² (17 900 lx horizontal)",
-         ["gensky", "3", "21", "12", "-y", "2024", "-c", "-B", "100"] + site_opts
-         + ["-g", f"{rho_g}"],
-         ["--time", "2024-03-21T12:00", "--sky", "cie-overcast", "--dhi", "100"]),
-    ]
+    instants = instant_specs(lat, lon, tz, rho_g)
     qualities = ["draft", "default", "high"]
 
     for key, title, skycmd, dsargs in instants:
