@@ -5,7 +5,6 @@ use super::args::AnnualArgs;
 use super::config;
 use super::messages::{note, warnings};
 use crate::error::{Error, Result};
-use crate::scene::Scene;
 use crate::sequence::annual::{AnnualOptions, RunControl};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -54,7 +53,7 @@ pub(super) fn show_progress(bar: Option<&indicatif::ProgressBar>, done: usize, t
 pub fn run(a: AnnualArgs) -> Result<()> {
     let q = config::quality(&a.quality, a.seed)?;
     let shard = config::shard(a.shard.as_deref())?;
-    let scene = Scene::load(&a.scene)?;
+    let scene = config::load_scene(&a.scene, a.grids.as_deref())?;
     warnings(&scene.warnings);
     let mut weather = crate::weather::read_weather(&a.weather)?;
     if let Some(step) = a.step {

@@ -156,6 +156,10 @@ pub struct RenderArgs {
     /// A view file as rvu saves it (.vf); it must set the view, as rpict requires.
     #[arg(long, visible_alias = "view-file")]
     pub vf: Option<PathBuf>,
+    /// A view of the model by its identifier (an HBJSON model's `views`); --vf replaces
+    /// it, --view options apply over it.
+    #[arg(long)]
+    pub view_name: Option<String>,
     /// Image width, pixels (Radiance's -x); width × height at most 2^28.
     #[arg(short = 'x', default_value_t = 512, value_parser = whole(1usize, MAX_PIXELS, "pixels"))]
     pub width: usize,
@@ -280,6 +284,10 @@ pub struct RunArgs {
     /// Seed of the Monte Carlo interreflection (results are a pure function of it).
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Only these sensor grids of an HBJSON model: identifiers or globs, comma-separated
+    /// ("Room_1*,Core_Grid"); default: every grid.
+    #[arg(long)]
+    pub grids: Option<String>,
 }
 
 /// Arguments of `daystep convergence`.
@@ -329,6 +337,10 @@ pub struct ConvergenceArgs {
 pub struct AnnualArgs {
     /// The scene file (scene.toml).
     pub scene: PathBuf,
+    /// Only these sensor grids of an HBJSON model: identifiers or globs, comma-separated
+    /// ("Room_1*,Core_Grid"); default: every grid.
+    #[arg(long)]
+    pub grids: Option<String>,
     /// Weather file: EnergyPlus EPW or Radiance/DAYSIM WEA.
     #[arg(long)]
     pub weather: PathBuf,

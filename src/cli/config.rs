@@ -212,6 +212,18 @@ pub fn knobs(mut ladders: Vec<Ladder>, list: Option<&str>) -> Result<Vec<Ladder>
     Ok(ladders)
 }
 
+/// Loads the scene and keeps the sensor grids `--grids` selects (all when not given).
+///
+/// # Errors
+/// As [`Scene::load`] and [`crate::scene::grids::select_grids`].
+pub fn load_scene(path: &Path, grids: Option<&str>) -> Result<crate::scene::Scene> {
+    let mut scene = crate::scene::Scene::load(path)?;
+    if let Some(g) = grids {
+        crate::scene::grids::select_grids(&mut scene, g)?;
+    }
+    Ok(scene)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

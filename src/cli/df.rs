@@ -4,7 +4,6 @@ use super::args::DfArgs;
 use super::config;
 use super::messages::{note, warnings};
 use crate::error::Result;
-use crate::scene::Scene;
 use crate::sequence;
 
 /// Runs `daystep df`: writes `df.csv` and `report.json` into `--out` and summarises the
@@ -14,7 +13,7 @@ use crate::sequence;
 /// Bad arguments or scene ([`crate::Error::Input`]), unwritable output.
 pub fn run(a: DfArgs) -> Result<()> {
     let q = config::quality(&a.run.quality, a.run.seed)?;
-    let scene = Scene::load(&a.scene)?;
+    let scene = config::load_scene(&a.scene, a.run.grids.as_deref())?;
     warnings(&scene.warnings);
     super::check_outputs(&a.out, None)?;
     let store = config::store(&a.run.cache, a.run.no_cache);

@@ -4,7 +4,6 @@ use super::args::{InstantArgs, SkyArg};
 use super::config;
 use super::messages::{note, warnings};
 use crate::error::Result;
-use crate::scene::Scene;
 use crate::sequence;
 
 /// Runs `daystep instant`: writes `sensors.csv` and `report.json` into `--out` and
@@ -19,7 +18,7 @@ pub fn run(a: InstantArgs) -> Result<()> {
     let spec = (a.sky != SkyArg::Image)
         .then(|| config::sky_spec(a.sky, &a.params))
         .transpose()?;
-    let scene = Scene::load(&a.scene)?;
+    let scene = config::load_scene(&a.scene, a.run.grids.as_deref())?;
     warnings(&scene.warnings);
     let (utc, local) = crate::site::parse_time(&a.time, scene.site.utc_offset_h)?;
     super::check_outputs(&a.out, a.gltf.as_deref())?;

@@ -14,21 +14,41 @@ use crate::sequence::render::{plan_weather, run_render, Camera, FramePlan, Rende
 use crate::sequence::StepTime;
 use std::path::Path;
 
-/// The camera of the arguments: `--vf`, then `--view` over it. Each must set a view option
-/// (a view file that sets none is refused, as rpict refuses a "bad view file").
-fn view(a: &RenderArgs) -> Result<View> {
+/// The camera of the arguments: the scene's view `--view-name`, then `--vf`, then `--view`
+/// over it. Each must set a view option (a view file that sets none is refused, as rpict
+/// refuses a "bad view file").
+fn view(a: &RenderArgs, scene: Option<&Scene>) -> Result<View> {
     let mut v = View::default();
+    if let (Some(name), Some(scene)) = (&a.view_name, scene) {
+        v = match scene.views.iter().find(|(n, _)| n == name) {
+            Some((_, view)) => *view,
+            None => {
+                let names: Vec<&str> = scene.views.iter().map(|(n, _)| n.as_str()).collect();
+                return Err(Error::arg(
+                    "--view-name",
+                    name,
+                    if names.is_empty() {
+                        "the scene has no named views (only an HBJSON model brings them)"
+                            .to_string()
+                    } else {
+                        format!("no such view; the model's views are: {}", names.join(", "))
+                    },
+                ));
+            }
+        };
+    }
     if let Some(f) = &a.vf {
         v = View::read_file(f)?;
     }
     if let Some(text) = &a.view {
         v = v.with_options(text, Path::new("<argument --view>"), None)?;
     }
-    if a.vf.is_none() && a.view.is_none() {
+    if a.vf.is_none() && a.view.is_none() && a.view_name.is_none() {
         return Err(Error::arg(
             "--view",
             "",
-            "give the camera with --view \"-vtv -vp … -vd …\" or --vf FILE.vf",
+            "give the camera with --view \"-vtv -vp … -vd …\", --vf FILE.vf or --view-name \
+             NAME",
         ));
     }
     Ok(v)
@@ -42,10 +62,12 @@ fn view(a: &RenderArgs) -> Result<View> {
 pub fn run(a: RenderArgs) -> Result<()> {
     let q = config::quality(&a.run.quality, a.run.seed)?;
     // Every number of the flags was checked when they were parsed; the image's area and
-    // the camera are checked here, before the scene is read.
+    // the camera are checked here, before the scene is read (a named view once it is).
     let (width, height) = config::image_size(a.width, a.height)?;
-    let camera = Camera {
-        view: view(&a)?,
+    let early = view(&a, None)?;
+    let scene = config::load_scene(&a.scene, a.run.grids.as_deref())?;
+    let mut camera = Camera {
+        view: early,
         options: RenderOptions {
             width,
             height,
@@ -60,7 +82,9 @@ pub fn run(a: RenderArgs) -> Result<()> {
             ..RenderOptions::default()
         },
     };
-    let scene = Scene::load(&a.scene)?;
+    if a.view_name.is_some() {
+        camera.view = view(&a, Some(&scene))?;
+    }
     warnings(&scene.warnings);
     let mut skipped = Vec::new();
     let frames: Vec<FramePlan> = match (&a.weather, &a.time) {

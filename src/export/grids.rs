@@ -22,6 +22,19 @@ pub struct GridSpan {
     pub sensors: Vec<usize>,
 }
 
+/// The scene's sensor grids as output spans (sensor indices of the run's order).
+pub fn spans_of(scene: &crate::scene::Scene) -> Vec<GridSpan> {
+    scene
+        .grids
+        .iter()
+        .map(|g| GridSpan {
+            identifier: g.identifier.clone(),
+            room: g.room.clone(),
+            sensors: g.sensors.clone().collect(),
+        })
+        .collect()
+}
+
 /// File name of the grid list in an output folder.
 pub const GRIDS_JSON: &str = "grids.json";
 

@@ -3,6 +3,7 @@
 //! subtracted so far-from-origin models keep full precision.
 
 pub mod faces;
+pub mod grids;
 pub mod junctions;
 pub mod material;
 pub mod obj;
@@ -18,6 +19,7 @@ use glam::DVec3;
 use std::path::{Path, PathBuf};
 
 pub use faces::Faces;
+pub use grids::SensorGrid;
 pub use material::Material;
 
 /// One input triangle in the scene frame (metres, origin-subtracted, ENU).
@@ -100,6 +102,12 @@ pub struct Scene {
     pub junctions: junctions::JunctionReport,
     /// Non-fatal remarks about the input (unknown MTL keys, …), each once.
     pub warnings: Vec<String>,
+    /// The model's named sensor grids, in model order (empty unless the model has them).
+    pub grids: Vec<SensorGrid>,
+    /// The model's named views (identifier, view), in model order.
+    pub views: Vec<(String, view::View)>,
+    /// The model's aperture groups: (group identifier, identifiers of its apertures).
+    pub aperture_groups: Vec<(String, Vec<String>)>,
 }
 
 impl Scene {
@@ -399,6 +407,9 @@ impl Scene {
             dropped_degenerate: dropped,
             junctions,
             warnings: Vec::new(),
+            grids: Vec::new(),
+            views: Vec::new(),
+            aperture_groups: Vec::new(),
         };
         if input.faces == Faces::Both {
             faces::add_back_faces(&mut scene);

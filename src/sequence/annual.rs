@@ -134,6 +134,9 @@ pub struct AnnualReport {
     pub skipped: Vec<String>,
     /// Warnings.
     pub warnings: Vec<String>,
+    /// The imported model's grids, views and aperture groups, when it has any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model: Option<super::report::ModelReport>,
     /// Whether the run was stopped before its end (Ctrl-C); rerun to continue.
     pub interrupted: bool,
 }
@@ -187,6 +190,7 @@ pub fn run_annual(
         quality: quality.name.into(),
         shard: format!("{k}/{n}"),
         warnings: weather.warnings.clone(),
+        model: super::report::ModelReport::of(scene),
         ..AnnualReport::default()
     };
     report
@@ -221,6 +225,8 @@ pub fn run_annual(
     report.steps = total_steps;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let sensors = scene.sensors.len();
+    // Which columns belong to which grid, for the metrics, merges and per-grid .ill files.
+    export::grids::write_grids_json(out, &export::grids::spans_of(scene))?;
     let (mut w_total, done_times) =
         IlluminanceWriter::resume(&out.join("illuminance.csv"), sensors)?;
     let (mut w_sun, done_sun) = IlluminanceWriter::resume(&out.join("direct_sun.csv"), sensors)?;

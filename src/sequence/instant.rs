@@ -179,6 +179,7 @@ pub fn run_instant_with(
     };
     report.cache = Some(store.stats());
     report.warnings.extend(store.warnings());
+    report.model = super::report::ModelReport::of(scene);
     report.total_seconds = t0.elapsed().as_secs_f64();
     step.report = report;
     Ok((InstantResult::of(engine, step), sky))
@@ -211,13 +212,23 @@ pub fn write_instant_gltf(
 /// # Errors
 /// [`Error::Io`] naming the file that could not be written.
 pub fn write_instant(scene: &Scene, result: &InstantResult, out: &Path) -> Result<()> {
-    let mut csv = String::from("sensor,x,y,z,lux,lux_err,lux_sun,lux_sky,lux_indirect\n");
+    // With sensor grids, a last column names each sensor's grid.
+    let spans = crate::export::grids::spans_of(scene);
+    let grid =
+        (!spans.is_empty()).then(|| crate::export::grids::grid_column(&spans, scene.sensors.len()));
+    let mut csv = String::from("sensor,x,y,z,lux,lux_err,lux_sun,lux_sky,lux_indirect");
+    csv.push_str(if grid.is_some() { ",grid\n" } else { "\n" });
     for (k, (s, v)) in scene.sensors.iter().zip(&result.sensors).enumerate() {
         let p = s.input_position;
         csv.push_str(&format!(
-            "{k},{},{},{},{:.6},{:.6},{:.6},{:.6},{:.6}\n",
+            "{k},{},{},{},{:.6},{:.6},{:.6},{:.6},{:.6}",
             p.x, p.y, p.z, v.lux, v.lux_err, v.lux_sun, v.lux_sky, v.lux_indirect
         ));
+        if let Some(g) = &grid {
+            csv.push(',');
+            csv.push_str(g[k].unwrap_or(""));
+        }
+        csv.push('\n');
     }
     crate::files::write_atomic(&out.join("sensors.csv"), csv.as_bytes())?;
     let json = serde_json::to_string_pretty(&result.report)

@@ -97,6 +97,51 @@ pub struct Counts {
     pub operators_reused: usize,
 }
 
+/// What an imported model brought besides geometry (`report.json` `model`): its sensor
+/// grids, views and aperture groups.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct ModelReport {
+    /// Sensor grids of the run, in sensor order: identifier, room, number of sensors.
+    pub sensor_grids: Vec<GridReport>,
+    /// Identifiers of the model's views (`render --view-name`).
+    pub views: Vec<String>,
+    /// Aperture groups: identifier and the identifiers of their apertures.
+    pub aperture_groups: Vec<(String, Vec<String>)>,
+}
+
+/// One sensor grid in [`ModelReport`].
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct GridReport {
+    /// The grid's identifier.
+    pub identifier: String,
+    /// Its room, where the model says.
+    pub room: Option<String>,
+    /// Its number of sensors.
+    pub sensors: usize,
+}
+
+impl ModelReport {
+    /// The scene's grids, views and aperture groups; `None` when it has none of them.
+    pub fn of(scene: &crate::scene::Scene) -> Option<ModelReport> {
+        if scene.grids.is_empty() && scene.views.is_empty() && scene.aperture_groups.is_empty() {
+            return None;
+        }
+        Some(ModelReport {
+            sensor_grids: scene
+                .grids
+                .iter()
+                .map(|g| GridReport {
+                    identifier: g.identifier.clone(),
+                    room: g.room.clone(),
+                    sensors: g.sensors.len(),
+                })
+                .collect(),
+            views: scene.views.iter().map(|(n, _)| n.clone()).collect(),
+            aperture_groups: scene.aperture_groups.clone(),
+        })
+    }
+}
+
 /// Everything `report.json` says about a run.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Report {
@@ -126,6 +171,9 @@ pub struct Report {
     pub skipped: Vec<String>,
     /// Non-fatal remarks.
     pub warnings: Vec<String>,
+    /// The imported model's grids, views and aperture groups, when it has any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model: Option<ModelReport>,
     /// How `lux_err` is estimated.
     pub error_model: String,
     /// Projection cache counters (hits, misses, rebuilds, bytes mapped), when a run went

@@ -256,8 +256,13 @@ def read_sensors_csv(path):
     rows = []
     lines = path.read_text().splitlines()
     head = lines[0].split(",")
+    def value(v):
+        try:
+            return float(v)
+        except ValueError:
+            return v  # the `grid` column of a model with sensor grids
     for l in lines[1:]:
-        rows.append(dict(zip(head, (float(v) for v in l.split(",")))))
+        rows.append(dict(zip(head, (value(v) for v in l.split(",")))))
     return rows
 
 
