@@ -53,9 +53,13 @@ pub(super) fn show_progress(bar: Option<&indicatif::ProgressBar>, done: usize, t
 pub fn run(a: AnnualArgs) -> Result<()> {
     let q = config::quality(&a.quality, a.seed)?;
     let shard = config::shard(a.shard.as_deref())?;
-    let scene = config::load_scene(&a.scene, a.grids.as_deref())?;
-    warnings(&scene.warnings);
+    let mut scene = crate::scene::Scene::load(&a.scene)?;
+    if let Some(g) = &a.grids {
+        crate::scene::grids::select_grids(&mut scene, g)?;
+    }
     let mut weather = crate::weather::read_weather(&a.weather)?;
+    scene.take_site_if_missing(weather.site, &a.weather.display().to_string());
+    warnings(&scene.warnings);
     if let Some(step) = a.step {
         weather = crate::weather::resample(&weather, step)?;
     }

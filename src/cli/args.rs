@@ -288,6 +288,10 @@ pub struct RunArgs {
     /// ("Room_1*,Core_Grid"); default: every grid.
     #[arg(long)]
     pub grids: Option<String>,
+    /// The site, "LAT,LON,UTC_OFFSET[,ELEVATION]" (°N, °E, hours of standard time, m): for
+    /// a model given without a scene file's [site] (it replaces one, with a warning).
+    #[arg(long, allow_hyphen_values = true)]
+    pub site: Option<String>,
 }
 
 /// Arguments of `daystep convergence`.

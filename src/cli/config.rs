@@ -3,7 +3,7 @@
 //! [`Error::Input`] naming the flag and the value, so it exits 1 with a message a user can
 //! act on.
 
-use super::args::{MetricArgs, SkyArg, SkyParams};
+use super::args::{MetricArgs, RunArgs, SkyArg, SkyParams};
 use crate::cache::Store;
 use crate::error::{Error, Result};
 use crate::metrics::MetricParams;
@@ -212,21 +212,93 @@ pub fn knobs(mut ladders: Vec<Ladder>, list: Option<&str>) -> Result<Vec<Ladder>
     Ok(ladders)
 }
 
-/// Loads the scene and keeps the sensor grids `--grids` selects (all when not given).
+/// Loads the scene, puts it at `--site` when given, and keeps the sensor grids `--grids`
+/// selects (all when not given).
 ///
 /// # Errors
-/// As [`Scene::load`] and [`crate::scene::grids::select_grids`].
-pub fn load_scene(path: &Path, grids: Option<&str>) -> Result<crate::scene::Scene> {
+/// As [`crate::scene::Scene::load`], [`site`] and [`crate::scene::grids::select_grids`].
+pub fn load_scene(path: &Path, run: &RunArgs) -> Result<crate::scene::Scene> {
     let mut scene = crate::scene::Scene::load(path)?;
-    if let Some(g) = grids {
+    if let Some(text) = &run.site {
+        let given = site(text)?;
+        if scene.site_given() && scene.site != given {
+            scene.warnings.push(format!(
+                "{}: --site replaces the scene file's [site]",
+                path.display()
+            ));
+        }
+        scene.site = given;
+        scene.take_site_if_missing(given, "--site");
+    }
+    if let Some(g) = &run.grids {
         crate::scene::grids::select_grids(&mut scene, g)?;
     }
     Ok(scene)
 }
 
+/// Parses `--site "LAT,LON,UTC_OFFSET[,ELEVATION]"`: degrees north, degrees east, hours,
+/// metres, in the ranges of `scene.toml`'s `[site]`.
+///
+/// # Errors
+/// [`Error::Input`] naming `--site` and the value.
+pub fn site(text: &str) -> Result<crate::site::Site> {
+    let bad = |m: &str| Error::arg("--site", text, m.to_string());
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| bad("give LAT,LON,UTC_OFFSET[,ELEVATION] as numbers"))?;
+    if !(3..=4).contains(&v.len()) || v.iter().any(|x| !x.is_finite()) {
+        return Err(bad(
+            "give LAT,LON,UTC_OFFSET[,ELEVATION] as 3 or 4 finite numbers",
+        ));
+    }
+    let ranges = [
+        ("latitude", -90.0, 90.0),
+        ("longitude", -180.0, 180.0),
+        ("UTC offset", -14.0, 14.0),
+        ("elevation", -1000.0, 10000.0),
+    ];
+    for (x, (name, lo, hi)) in v.iter().zip(ranges) {
+        if !(lo..=hi).contains(x) {
+            return Err(bad(&format!("{name} {x} is outside [{lo}, {hi}]")));
+        }
+    }
+    Ok(crate::site::Site {
+        latitude: v[0],
+        longitude: v[1],
+        utc_offset_h: v[2],
+        elevation_m: v.get(3).copied().unwrap_or(0.0),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn site_flag_is_three_or_four_numbers_in_range() {
+        let s = site("36.1,-79.95,-5").unwrap();
+        assert_eq!(
+            (s.latitude, s.longitude, s.utc_offset_h, s.elevation_m),
+            (36.1, -79.95, -5.0, 0.0)
+        );
+        assert_eq!(site("0, 0, 0, 273").unwrap().elevation_m, 273.0);
+        for bad in [
+            "",
+            "1,2",
+            "1,2,3,4,5",
+            "91,0,0",
+            "0,181,0",
+            "0,0,15",
+            "0,0,0,20000",
+            "a,b,c",
+            "nan,0,0",
+        ] {
+            let e = site(bad).unwrap_err().to_string();
+            assert!(e.contains("--site"), "{bad}: {e}");
+        }
+    }
 
     #[test]
     fn shard_accepts_k_of_n_only() {

@@ -13,7 +13,7 @@ use crate::sequence;
 /// Bad arguments or scene ([`crate::Error::Input`]), unwritable output.
 pub fn run(a: DfArgs) -> Result<()> {
     let q = config::quality(&a.run.quality, a.run.seed)?;
-    let scene = config::load_scene(&a.scene, a.run.grids.as_deref())?;
+    let scene = config::load_scene(&a.scene, &a.run)?;
     warnings(&scene.warnings);
     super::check_outputs(&a.out, None)?;
     let store = config::store(&a.run.cache, a.run.no_cache);

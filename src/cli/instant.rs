@@ -18,7 +18,7 @@ pub fn run(a: InstantArgs) -> Result<()> {
     let spec = (a.sky != SkyArg::Image)
         .then(|| config::sky_spec(a.sky, &a.params))
         .transpose()?;
-    let scene = config::load_scene(&a.scene, a.run.grids.as_deref())?;
+    let scene = config::load_scene(&a.scene, &a.run)?;
     warnings(&scene.warnings);
     let (utc, local) = crate::site::parse_time(&a.time, scene.site.utc_offset_h)?;
     super::check_outputs(&a.out, a.gltf.as_deref())?;

@@ -65,7 +65,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     // the camera are checked here, before the scene is read (a named view once it is).
     let (width, height) = config::image_size(a.width, a.height)?;
     let early = view(&a, None)?;
-    let scene = config::load_scene(&a.scene, a.run.grids.as_deref())?;
+    let mut scene = config::load_scene(&a.scene, &a.run)?;
     let mut camera = Camera {
         view: early,
         options: RenderOptions {
@@ -85,11 +85,12 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if a.view_name.is_some() {
         camera.view = view(&a, Some(&scene))?;
     }
-    warnings(&scene.warnings);
     let mut skipped = Vec::new();
     let frames: Vec<FramePlan> = match (&a.weather, &a.time) {
         (Some(path), _) => {
             let mut weather = crate::weather::read_weather(path)?;
+            scene.take_site_if_missing(weather.site, &path.display().to_string());
+            warnings(&scene.warnings);
             if let Some(step) = a.step {
                 weather = crate::weather::resample(&weather, step)?;
             }
@@ -114,6 +115,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
             frames
         }
         (None, Some(t)) => {
+            warnings(&scene.warnings);
             let sky = a
                 .sky
                 .ok_or_else(|| Error::arg("--sky", "", "--time needs --sky"))?;

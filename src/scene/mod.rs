@@ -139,6 +139,27 @@ impl Scene {
         self.materials.iter().any(Material::is_glazing)
     }
 
+    /// Puts the scene at `site` when its file gave none ([`Self::site_given`]), with a
+    /// warning saying where the site came from (`source`, e.g. the weather file's path);
+    /// a scene with its own site is left as it is. Returns whether the site was taken.
+    pub fn take_site_if_missing(&mut self, site: Site, source: &str) -> bool {
+        if self.site_given() {
+            return false;
+        }
+        self.warnings
+            .retain(|w| !w.contains(scene_file::NO_SITE_WARNING));
+        self.warnings.push(format!(
+            "{}: no site in the scene: using {source}'s (latitude {:.4}°, longitude {:.4}°, \
+             UTC{:+})",
+            self.path.display(),
+            site.latitude,
+            site.longitude,
+            site.utc_offset_h
+        ));
+        self.site = site;
+        true
+    }
+
     /// False when the scene file had no `[site]` table and [`Site::default`] stands in, so a
     /// weather file's site should be used instead (without a disagreement warning).
     pub fn site_given(&self) -> bool {

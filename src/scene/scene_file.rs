@@ -18,6 +18,9 @@ use toml::Spanned;
 pub const NO_SITE_WARNING: &str =
     "no [site] table: using the default site (Greenwich, UTC) unless a weather file gives one";
 
+/// Ground reflectance when the scene file gives none (Radiance's and honeybee's 0.2).
+pub const DEFAULT_GROUND_REFLECTANCE: f64 = 0.2;
+
 /// Top-level keys of a scene file.
 const KNOWN_KEYS: [&str; 7] = [
     "geometry",
@@ -65,8 +68,12 @@ struct SiteToml {
 /// non-finite (TOML spells `nan` and `inf`), `up` not "z" or "y"), and every error of
 /// [`obj::load`] and [`sensors::load`]. [`Error::Io`] when a file cannot be read.
 pub fn load(path: &Path) -> Result<Scene> {
-    let text = files::read_text(path)?;
-    let parsed = parse(path, &text)?;
+    let parsed = if is_model_file(path) {
+        model_alone(path)
+    } else {
+        let text = files::read_text(path)?;
+        parse(path, &text)?
+    };
     let (triangles, materials, groups, obj_warnings) = obj::load(&parsed.geometry, parsed.y_up)?;
     let sensors = match &parsed.sensors {
         Some(p) => sensors::load(p, parsed.y_up)?,
@@ -91,6 +98,28 @@ pub fn load(path: &Path) -> Result<Scene> {
     warnings.retain(|w| seen.insert(w.clone()));
     scene.warnings.extend(warnings);
     Ok(scene)
+}
+
+/// True for a model file given where a scene file is expected (an HBJSON, `.hbjson`).
+pub fn is_model_file(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("hbjson"))
+}
+
+/// The scene of a model given alone: its own geometry and sensor grids, the defaults of
+/// `scene.toml` for everything else, and no site (a weather file or `--site` gives it).
+fn model_alone(path: &Path) -> Parsed {
+    Parsed {
+        geometry: path.to_path_buf(),
+        sensors: None,
+        y_up: false,
+        north_deg: 0.0,
+        ground_reflectance: DEFAULT_GROUND_REFLECTANCE,
+        faces: Faces::Both,
+        site: Site::default(),
+        warnings: vec![format!("{}: {NO_SITE_WARNING}", path.display())],
+    }
 }
 
 /// A validated scene file, paths resolved.
@@ -241,7 +270,7 @@ fn parse(path: &Path, text: &str) -> Result<Parsed> {
         .as_ref()
         .map(|v| check("ground_reflectance", v, Some((0.0, 1.0, false)), ""))
         .transpose()?
-        .unwrap_or(0.2);
+        .unwrap_or(DEFAULT_GROUND_REFLECTANCE);
     let site = match &raw.site {
         Some(s) => Site {
             latitude: check(
