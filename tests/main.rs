@@ -15,7 +15,6 @@ mod extent; // site context of any size: the office on a 1 km ground and in a ri
 mod extremes; // low sun, polar day and night, turbidity limits, slivers, far coordinates
 mod imagesky; // HDR image skies: uniform image πL, images of the CIE overcast sky in both mappings
 mod generated_scenes; // the generated office and building: areas, normals, closure, triangle target, bundled files
-mod model_outputs; // a Honeybee model given alone: grids in every output, --grids, per-grid metrics, named views
 mod layers; // the layer rule of lib.rs: lower layers never import higher ones
 mod outputs; // outputs checked before the work; a resumed render keeps only frames of the same inputs
 mod parsers; // every parser under arbitrary and mutated input: no panic, hang or unbounded allocation
