@@ -17,12 +17,15 @@
 //!   (unsharded runs and merges), `report.json`.
 
 use super::config::{Quality, SkySpec};
+use super::merge::parse_times;
 use super::report::StageTimes;
 use super::step::{Engine, EngineOptions, StepTime};
 use crate::cache::Store;
 use crate::error::{Error, Result};
 use crate::export::{self, IlluminanceWriter};
-use crate::metrics::{self, MetricParams};
+use crate::metrics::MetricParams;
+// Where callers found them before the tables moved to `merge`.
+pub use super::merge::{merge, write_metrics};
 use crate::radiosity::TransportState;
 use crate::scene::Scene;
 use crate::site::solar_position::solar_position;
@@ -408,8 +411,9 @@ pub fn run_annual(
                 let (times, rows) = export::read_illuminance_csv(&out.join("illuminance.csv"))?;
                 let times = parse_times(&times)?;
                 export::write_ill(&out.join("illuminance.ill"), &times, &rows)?;
-                if let Some(g) = export::grids::read_grids_json(out, scene.sensors.len())? {
-                    export::grids::write_grid_ills(out, &g, &times, &rows)?;
+                let grids = export::grids::spans_of(scene);
+                if !grids.is_empty() {
+                    export::grids::write_grid_ills(out, &grids, &times, &rows)?;
                 }
             }
             report
@@ -441,182 +445,6 @@ pub fn run_annual(
         .map_err(|e| Error::Internal(format!("report serialisation: {e}")))?;
     crate::files::write_atomic(&out.join("report.json"), json.as_bytes())?;
     Ok(report)
-}
-
-fn parse_times(times: &[String]) -> Result<Vec<NaiveDateTime>> {
-    times
-        .iter()
-        .map(|t| {
-            NaiveDateTime::parse_from_str(t, export::TIME_FORMAT)
-                .map_err(|e| Error::Internal(format!("time {t}: {e}")))
-        })
-        .collect()
-}
-
-/// Computes `metrics.csv` and `summary.json` in `out` from its `illuminance.csv` and
-/// `direct_sun.csv` (a finished run or a merge).
-///
-/// # Errors
-/// Missing or malformed input files; files that cannot be written.
-pub fn write_metrics(out: &Path, step_minutes: u32, params: &MetricParams) -> Result<()> {
-    params.validate()?;
-    let (times, total) = export::read_illuminance_csv(&out.join("illuminance.csv"))?;
-    let (_, sun) = export::read_illuminance_csv(&out.join("direct_sun.csv"))?;
-    let times = parse_times(&times)?;
-    let occupied: Vec<bool> = times
-        .iter()
-        .map(|t| metrics::is_occupied(*t, step_minutes, params))
-        .collect();
-    let sensors = total.first().map_or(0, |r| r.len());
-    // Night steps are written as 0 lx: counted dark whether flagged or not.
-    let sun_up = vec![true; times.len()];
-    let per: Vec<metrics::SensorMetrics> = (0..sensors)
-        .map(|k| {
-            let t: Vec<f64> = total.iter().map(|r| r[k]).collect();
-            let s: Vec<f64> = sun.iter().map(|r| r[k]).collect();
-            metrics::sensor_metrics(
-                &t,
-                &s,
-                &occupied,
-                &sun_up,
-                step_minutes as f64 / 60.0,
-                params,
-            )
-        })
-        .collect();
-    let grids = export::grids::read_grids_json(out, sensors)?;
-    let column = grids
-        .as_deref()
-        .map(|g| export::grids::grid_column(g, sensors));
-    export::write_metrics_csv(&out.join("metrics.csv"), &per, column.as_deref())?;
-    let summary = metrics::summary(&per, None, params)?;
-    let mut doc = export::summary_json_value(&summary, params);
-    if let Some(grids) = &grids {
-        // The same summary over each grid's and each room's sensors.
-        let of = |ks: &[usize]| -> Result<serde_json::Value> {
-            let sub: Vec<_> = ks.iter().map(|&k| per[k].clone()).collect();
-            let s = metrics::summary(&sub, None, params)?;
-            serde_json::to_value(s).map_err(|e| Error::Internal(format!("summary.json: {e}")))
-        };
-        let mut by_grid = serde_json::Map::new();
-        for g in grids {
-            by_grid.insert(g.identifier.clone(), of(&g.sensors)?);
-        }
-        let mut by_room = serde_json::Map::new();
-        for (room, ks) in export::grids::rooms(grids) {
-            by_room.insert(room, of(&ks)?);
-        }
-        doc["grids"] = by_grid.into();
-        doc["rooms"] = by_room.into();
-    }
-    export::write_json(&out.join("summary.json"), &doc)
-}
-
-/// Merges shard folders into `out` (the same files a single run writes) and computes the
-/// metrics.
-///
-/// # Errors
-/// Shards that do not fit together (headers, duplicate or missing times), I/O.
-pub fn merge(
-    parts: &[std::path::PathBuf],
-    out: &Path,
-    step_minutes: u32,
-    params: &MetricParams,
-) -> Result<()> {
-    check_shards(parts)?;
-    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
-    for f in ["illuminance.csv", "direct_sun.csv", "surfaces.csv"] {
-        let files: Vec<_> = parts.iter().map(|p| p.join(f)).collect();
-        // surfaces.csv only when the shards were asked for it.
-        if f == "surfaces.csv" && !files.iter().all(|p| p.exists()) {
-            continue;
-        }
-        export::merge_illuminance(&files, &out.join(f))?;
-    }
-    merge_grids(parts, out)?;
-    write_metrics(out, step_minutes, params)
-}
-
-/// Carries the shards' `grids.json` over to the merge: every shard of one study has the
-/// same sensors and so the same grids, which is checked.
-fn merge_grids(parts: &[std::path::PathBuf], out: &Path) -> Result<()> {
-    let mut first: Option<(std::path::PathBuf, String)> = None;
-    for p in parts {
-        let path = p.join(export::grids::GRIDS_JSON);
-        let text = if path.exists() {
-            crate::files::read_text(&path)?
-        } else {
-            String::new()
-        };
-        match &first {
-            None => first = Some((path, text)),
-            Some((f, t)) if *t != text => {
-                return Err(Error::input(
-                    &path,
-                    None,
-                    None,
-                    format!(
-                        "the sensor grids differ from {}'s: the folders are not shards of one \
-                         study",
-                        f.display()
-                    ),
-                ))
-            }
-            Some(_) => {}
-        }
-    }
-    match first {
-        Some((_, t)) if !t.is_empty() => {
-            crate::files::write_atomic(&out.join(export::grids::GRIDS_JSON), t.as_bytes())
-        }
-        _ => Ok(()),
-    }
-}
-
-/// Every shard k/n of one study must be given once: a missing shard whose days are only
-/// at the ends of the period would otherwise merge into a shorter series without notice.
-/// Reads each folder's `report.json` (folders without one are not checked).
-fn check_shards(parts: &[std::path::PathBuf]) -> Result<()> {
-    let mut seen: Vec<(u32, u32, &std::path::PathBuf)> = Vec::new();
-    for p in parts {
-        let path = p.join("report.json");
-        let Ok(text) = std::fs::read_to_string(&path) else {
-            continue;
-        };
-        let shard = serde_json::from_str::<serde_json::Value>(&text)
-            .ok()
-            .and_then(|v| v.get("shard").and_then(|s| s.as_str()).map(str::to_owned));
-        let Some((k, n)) = shard.as_deref().and_then(|s| s.split_once('/')) else {
-            continue;
-        };
-        if let (Ok(k), Ok(n)) = (k.parse::<u32>(), n.parse::<u32>()) {
-            seen.push((k, n, p));
-        }
-    }
-    let Some(&(_, n, _)) = seen.first() else {
-        return Ok(());
-    };
-    if let Some((k, m, p)) = seen.iter().find(|s| s.1 != n) {
-        return Err(Error::input(
-            p.join("report.json"),
-            None,
-            Some(&format!("{k}/{m}")),
-            format!("shard of {m}, but the first folder is a shard of {n}"),
-        ));
-    }
-    if seen.len() == parts.len() {
-        for k in 1..=n {
-            if !seen.iter().any(|s| s.0 == k) {
-                return Err(Error::input(
-                    parts[0].join("report.json"),
-                    None,
-                    Some(&format!("{k}/{n}")),
-                    format!("shard {k}/{n} is missing: merge needs all {n} shard folders"),
-                ));
-            }
-        }
-    }
-    Ok(())
 }
 
 /// What a step needs.

@@ -22,6 +22,7 @@ pub mod instant;
 pub mod df;
 pub mod convergence;
 pub mod annual;
+pub mod merge;
 pub mod surfaces;
 pub mod render;
 pub mod report;

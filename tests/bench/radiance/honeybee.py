@@ -25,7 +25,6 @@ import hashlib
 import json
 import math
 import os
-import subprocess
 import sys
 import tomllib
 from pathlib import Path
@@ -97,12 +96,7 @@ def main():
         if a.only and a.only != key:
             continue
         d = work / key
-        d.mkdir(exist_ok=True)
-        (d / "sky.rad").write_text(v.run(skycmd, env) + v.glow_lines())
-        octree = d / "scene.oct"
-        octree.write_bytes(subprocess.run(
-            ["oconv", "-f", str(d / "sky.rad")] + [str(rad / f) for f in RAD_FILES],
-            env=env, capture_output=True, check=True).stdout)
+        octree = v.sky_octree(d, skycmd, [rad / f for f in RAD_FILES], env)
         half_opts = v.QUICK_REFERENCE_HALF if a.quick else v.REFERENCE_HALF
         ref, t_ref, cmd_ref = cached_rtrace(d, octree, pts_text, ref_opts, env, a.nproc)
         half, _, _ = cached_rtrace(d, octree, pts_text, half_opts, env, a.nproc)

@@ -749,6 +749,17 @@ def summary(ds, ref, ref_ind, groups, ref_noise):
     print()
 
 
+def sky_octree(d, skycmd, scene_files, env):
+    """Writes d/sky.rad (the sky of `skycmd` with its ground glow) and d/scene.oct, the
+    octree of that sky and `scene_files` (paths, or names relative to d); returns its path."""
+    d.mkdir(parents=True, exist_ok=True)
+    (d / "sky.rad").write_text(run(skycmd, env) + glow_lines())
+    octree = d / "scene.oct"
+    octree.write_bytes(subprocess.run(["oconv", "-f", "sky.rad"] + [str(f) for f in scene_files],
+                                      env=env, cwd=d, capture_output=True, check=True).stdout)
+    return octree
+
+
 def instant_specs(lat, lon, tz, rho_g):
     """The two bench instants: (key, title, Radiance sky command, daystep arguments)."""
     # Radiance longitude is west-positive, the meridian too.

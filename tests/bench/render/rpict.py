@@ -243,11 +243,7 @@ def main():
         if a.only and a.only != key:
             continue
         d = work / key
-        d.mkdir(exist_ok=True)
-        (d / "sky.rad").write_text(v.run(skycmd, env) + v.glow_lines())
-        octree = d / "scene.oct"
-        octree.write_bytes(subprocess.run(["oconv", "-f", "sky.rad", "../scene.rad"], env=env,
-                                          cwd=d, capture_output=True, check=True).stdout)
+        octree = v.sky_octree(d, skycmd, ["../scene.rad"], env)
         for vname, view in (("toward the window", VIEW), ("toward the back wall", VIEW_BACK)):
             compare_view(a, env, d, key, skycmd, dsargs, vname, view, scene_path, octree)
 
