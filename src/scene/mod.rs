@@ -6,6 +6,7 @@ pub mod faces;
 pub mod junctions;
 pub mod material;
 pub mod obj;
+pub mod polygon;
 mod mtl;
 pub mod scene_file;
 pub mod sensors;
