@@ -3,6 +3,10 @@
 //! subtracted so far-from-origin models keep full precision.
 
 pub mod faces;
+pub mod hbjson;
+mod hbjson_modifiers;
+mod hbjson_schema;
+pub mod imported;
 pub mod junctions;
 pub mod material;
 pub mod obj;
@@ -99,6 +103,10 @@ pub struct Scene {
     /// What cutting surfaces along the feet of walls standing on them did
     /// ([`junctions::split_at_junctions`]).
     pub junctions: junctions::JunctionReport,
+    /// What the model file gave besides geometry (HBJSON: rooms, sensor grids with the
+    /// grid of each sensor, named views, aperture groups, counts of bad geometry); empty
+    /// for OBJ.
+    pub imported: imported::Imported,
     /// Non-fatal remarks about the input (unknown MTL keys, …), each once.
     pub warnings: Vec<String>,
 }
@@ -254,6 +262,9 @@ pub struct ModelInput {
     pub ground_reflectance: f64,
     /// Which faces of opaque surfaces reflect.
     pub faces: Faces,
+    /// What the model file gave besides geometry ([`Scene::imported`]);
+    /// `imported.sensor_grid` is empty or has one entry per sensor.
+    pub imported: imported::Imported,
 }
 
 /// Converts a Y-up point to Z-up: (x, y, z) → (x, −z, y) (glTF/Blender convention).
@@ -382,6 +393,15 @@ impl Scene {
                 input_position: *p,
             });
         }
+        if !input.imported.sensor_grid.is_empty()
+            && input.imported.sensor_grid.len() != input.sensors.len()
+        {
+            return Err(Error::Internal(format!(
+                "{} sensors but {} sensor grid indices",
+                input.sensors.len(),
+                input.imported.sensor_grid.len()
+            )));
+        }
         let input_triangles = triangles.len();
         let mut scene = Scene {
             path: path.to_path_buf(),
@@ -399,6 +419,7 @@ impl Scene {
             y_up: false,
             dropped_degenerate: dropped,
             junctions,
+            imported: input.imported,
             warnings: Vec::new(),
         };
         if input.faces == Faces::Both {

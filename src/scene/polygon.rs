@@ -156,6 +156,89 @@ pub fn triangulate(boundary: &[DVec3], holes: &[Vec<DVec3>], tolerance_m: f64) -
     Triangulated { triangles, issues }
 }
 
+/// The unit Newell normal of a closed ring (right-hand rule), `None` when the ring
+/// encloses no area or is not finite.
+pub fn newell_normal(ring: &[DVec3]) -> Option<DVec3> {
+    let ring = dedupe(ring);
+    let o = *ring.first()?;
+    newell(&ring, o).try_normalize()
+}
+
+/// True when every vertex of `inner` lies within `tolerance_m` of the plane of `boundary`
+/// and inside its outline or within `tolerance_m` of it, and not inside any of `holes`
+/// (further than `tolerance_m` from the hole's edges): the test for an aperture lying in
+/// its parent face. Vertices only: an inner outline whose edges leave a concave outline
+/// between two inside vertices passes. False for a boundary enclosing no area.
+pub fn encloses(
+    boundary: &[DVec3],
+    holes: &[Vec<DVec3>],
+    inner: &[DVec3],
+    tolerance_m: f64,
+) -> bool {
+    let Some(n) = newell_normal(boundary) else {
+        return false;
+    };
+    let o = boundary[0];
+    let extent = boundary
+        .iter()
+        .chain(inner)
+        .map(|v| (*v - o).abs().max_element())
+        .fold(0.0, f64::max);
+    // Never tighter than rounding at the model's size.
+    let tol = tolerance_m.max(0.0).max(1e-9 * extent);
+    let u = n.any_orthonormal_vector();
+    let v = n.cross(u);
+    let flat = |r: &[DVec3]| -> Vec<DVec2> {
+        r.iter()
+            .map(|p| DVec2::new((*p - o).dot(u), (*p - o).dot(v)))
+            .collect()
+    };
+    let outer = flat(boundary);
+    let holes: Vec<Vec<DVec2>> = holes.iter().map(|h| flat(h)).collect();
+    inner.iter().all(|p| {
+        if ((*p - o).dot(n)).abs() > tol {
+            return false;
+        }
+        let q = DVec2::new((*p - o).dot(u), (*p - o).dot(v));
+        let in_outer = point_in_ring(q, &outer) || distance_to_ring(q, &outer) <= tol;
+        let in_hole = holes
+            .iter()
+            .any(|h| h.len() >= 3 && point_in_ring(q, h) && distance_to_ring(q, h) > tol);
+        in_outer && !in_hole
+    })
+}
+
+/// Even-odd point-in-polygon test.
+fn point_in_ring(q: DVec2, ring: &[DVec2]) -> bool {
+    let mut inside = false;
+    for (i, a) in ring.iter().enumerate() {
+        let b = ring[(i + 1) % ring.len()];
+        if (a.y > q.y) != (b.y > q.y) {
+            let x = a.x + (q.y - a.y) / (b.y - a.y) * (b.x - a.x);
+            if q.x < x {
+                inside = !inside;
+            }
+        }
+    }
+    inside
+}
+
+/// Distance from `q` to the nearest edge of a closed ring.
+fn distance_to_ring(q: DVec2, ring: &[DVec2]) -> f64 {
+    let mut best = f64::INFINITY;
+    for (i, a) in ring.iter().enumerate() {
+        let b = ring[(i + 1) % ring.len()];
+        let ab = b - *a;
+        let t = if ab.length_squared() > 0.0 {
+            ((q - *a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        best = best.min((q - (*a + ab * t)).length());
+    }
+    best
+}
+
 fn zero_area() -> Triangulated {
     Triangulated {
         triangles: Vec::new(),

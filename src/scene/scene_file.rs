@@ -4,7 +4,7 @@
 //! Unknown keys are not errors but warnings, so files written for a newer daystep still load.
 //! Values are read as [`toml::Spanned`] so that range errors name their line.
 
-use super::{obj, sensors, Faces, ModelInput, Scene};
+use super::{hbjson, obj, sensors, Faces, ModelInput, Scene};
 use crate::error::{Error, Result};
 use crate::files;
 use crate::site::Site;
@@ -65,33 +65,113 @@ struct SiteToml {
 /// non-finite (TOML spells `nan` and `inf`), `up` not "z" or "y"), and every error of
 /// [`obj::load`] and [`sensors::load`]. [`Error::Io`] when a file cannot be read.
 pub fn load(path: &Path) -> Result<Scene> {
+    if is_hbjson(path) {
+        return load_hbjson_alone(path);
+    }
     let text = files::read_text(path)?;
     let parsed = parse(path, &text)?;
-    let (triangles, materials, groups, obj_warnings) = obj::load(&parsed.geometry, parsed.y_up)?;
+    let mut geometry = read_geometry(&parsed.geometry, parsed.y_up)?;
     let sensors = match &parsed.sensors {
-        Some(p) => sensors::load(p, parsed.y_up)?,
-        None => Vec::new(),
+        Some(p) => {
+            // The .pts file replaces the model's grids as the sensors.
+            geometry.imported.sensor_grid.clear();
+            sensors::load(p, parsed.y_up)?
+        }
+        None => geometry.sensors,
     };
     let input = ModelInput {
-        triangles,
-        materials,
-        groups,
+        triangles: geometry.triangles,
+        materials: geometry.materials,
+        groups: geometry.groups,
         sensors,
         north_deg: parsed.north_deg,
         site: parsed.site,
         ground_reflectance: parsed.ground_reflectance,
         faces: parsed.faces,
+        imported: geometry.imported,
     };
     let mut scene = Scene::from_model(path, input)?;
     scene.y_up = parsed.y_up;
     let mut warnings = parsed.warnings;
-    warnings.extend(obj_warnings);
+    warnings.extend(geometry.warnings);
     // Each remark once, in order of appearance.
     let mut seen = std::collections::HashSet::new();
     warnings.retain(|w| seen.insert(w.clone()));
     scene.warnings.extend(warnings);
     Ok(scene)
 }
+
+/// True when `path` names a Honeybee model (`.hbjson`, or `.json` as honeybee also writes).
+pub fn is_hbjson(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("hbjson") || e.eq_ignore_ascii_case("json"))
+}
+
+/// What a geometry file gives, whatever its format.
+struct Geometry {
+    triangles: Vec<super::Triangle>,
+    materials: Vec<super::Material>,
+    groups: Vec<String>,
+    /// The model's own sensors (HBJSON grids), model frame.
+    sensors: Vec<(glam::DVec3, glam::DVec3)>,
+    imported: super::imported::Imported,
+    warnings: Vec<String>,
+}
+
+/// Reads the geometry file by its extension: HBJSON, else OBJ.
+fn read_geometry(path: &Path, y_up: bool) -> Result<Geometry> {
+    if is_hbjson(path) {
+        let h = hbjson::load(path)?;
+        return Ok(Geometry {
+            triangles: h.triangles,
+            materials: h.materials,
+            groups: h.groups,
+            sensors: h.sensors,
+            imported: h.imported,
+            warnings: h.warnings,
+        });
+    }
+    let (triangles, materials, groups, warnings) = obj::load(path, y_up)?;
+    Ok(Geometry {
+        triangles,
+        materials,
+        groups,
+        sensors: Vec::new(),
+        imported: Default::default(),
+        warnings,
+    })
+}
+
+/// A Honeybee model given as the scene itself: its grids are the sensors, and the scene
+/// file's defaults apply (no north rotation, ground reflectance 0.2, both faces reflect,
+/// the default site unless a weather file gives one).
+fn load_hbjson_alone(path: &Path) -> Result<Scene> {
+    let h = hbjson::load(path)?;
+    let input = ModelInput {
+        triangles: h.triangles,
+        materials: h.materials,
+        groups: h.groups,
+        sensors: h.sensors,
+        north_deg: 0.0,
+        site: Site::default(),
+        ground_reflectance: DEFAULT_GROUND_REFLECTANCE,
+        faces: Faces::Both,
+        imported: h.imported,
+    };
+    let mut scene = Scene::from_model(path, input)?;
+    scene
+        .warnings
+        .push(format!("{}: {NO_SITE_WARNING}", path.display()));
+    let mut seen = std::collections::HashSet::new();
+    let mut warnings = h.warnings;
+    warnings.retain(|w| seen.insert(w.clone()));
+    scene.warnings.extend(warnings);
+    Ok(scene)
+}
+
+/// Ground reflectance when the scene file gives none.
+const DEFAULT_GROUND_REFLECTANCE: f64 = 0.2;
 
 /// A validated scene file, paths resolved.
 #[derive(Debug)]
@@ -166,7 +246,7 @@ fn parse(path: &Path, text: &str) -> Result<Parsed> {
                 path,
                 None,
                 None,
-                "missing required key `geometry` (the OBJ file, relative to the scene file)",
+                "missing required key `geometry` (the OBJ or HBJSON file, relative to the scene file)",
             ))
         }
     };
@@ -191,6 +271,15 @@ fn parse(path: &Path, text: &str) -> Result<Parsed> {
             }
         },
     };
+
+    if let Some(u) = raw.up.as_ref().filter(|_| y_up && is_hbjson(&geometry)) {
+        return Err(Error::input(
+            path,
+            at(u.span()),
+            Some(u.get_ref()),
+            "`up` does not apply to a Honeybee model (HBJSON is always Z-up): remove it",
+        ));
+    }
 
     let faces = match &raw.faces {
         None => Faces::Both,
@@ -241,7 +330,7 @@ fn parse(path: &Path, text: &str) -> Result<Parsed> {
         .as_ref()
         .map(|v| check("ground_reflectance", v, Some((0.0, 1.0, false)), ""))
         .transpose()?
-        .unwrap_or(0.2);
+        .unwrap_or(DEFAULT_GROUND_REFLECTANCE);
     let site = match &raw.site {
         Some(s) => Site {
             latitude: check(
