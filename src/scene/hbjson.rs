@@ -93,7 +93,11 @@ pub fn parse(path: &Path, text: &str) -> Result<HbjsonContents> {
             path,
             Some(e.line()),
             value,
-            format!("invalid JSON at line {}, column {}: {e}", e.line(), e.column()),
+            format!(
+                "invalid JSON at line {}, column {}: {e}",
+                e.line(),
+                e.column()
+            ),
         )
     })?;
     let model_id = value
@@ -163,6 +167,7 @@ pub fn parse(path: &Path, text: &str) -> Result<HbjsonContents> {
     )?;
     let mut b = Builder {
         path: path.to_path_buf(),
+        model: model_name.clone(),
         units,
         tol_m: units.m(tolerance),
         mods: modifiers,
@@ -175,29 +180,59 @@ pub fn parse(path: &Path, text: &str) -> Result<HbjsonContents> {
     for (k, room) in model.rooms.unwrap_or_default().into_iter().enumerate() {
         b.room(room, k)?;
     }
-    for (k, f) in model.orphaned_faces.unwrap_or_default().into_iter().enumerate() {
+    for (k, f) in model
+        .orphaned_faces
+        .unwrap_or_default()
+        .into_iter()
+        .enumerate()
+    {
         let ctx = || format!("orphaned face {}", k + 1);
         b.face(f, None, &ctx)?;
     }
-    for (k, a) in model.orphaned_apertures.unwrap_or_default().into_iter().enumerate() {
+    for (k, a) in model
+        .orphaned_apertures
+        .unwrap_or_default()
+        .into_iter()
+        .enumerate()
+    {
         let ctx = || format!("orphaned aperture {}", k + 1);
         let s: SubFaceJ = b.parse(a, "Aperture", &ctx)?;
         b.sub_face(s, SubKind::Aperture, "Wall", None)?;
     }
-    for (k, d) in model.orphaned_doors.unwrap_or_default().into_iter().enumerate() {
+    for (k, d) in model
+        .orphaned_doors
+        .unwrap_or_default()
+        .into_iter()
+        .enumerate()
+    {
         let ctx = || format!("orphaned door {}", k + 1);
         let s: SubFaceJ = b.parse(d, "Door", &ctx)?;
         b.sub_face(s, SubKind::Door, "Wall", None)?;
     }
-    for (k, s) in model.orphaned_shades.unwrap_or_default().into_iter().enumerate() {
+    for (k, s) in model
+        .orphaned_shades
+        .unwrap_or_default()
+        .into_iter()
+        .enumerate()
+    {
         let ctx = || format!("orphaned shade {}", k + 1);
         b.shade(s, None, Parent::Orphan, false, &ctx)?;
     }
-    for (k, s) in model.shade_meshes.unwrap_or_default().into_iter().enumerate() {
+    for (k, s) in model
+        .shade_meshes
+        .unwrap_or_default()
+        .into_iter()
+        .enumerate()
+    {
         let ctx = || format!("shade mesh {}", k + 1);
         b.shade_mesh(s, &ctx)?;
     }
-    for (k, g) in radiance.sensor_grids.unwrap_or_default().into_iter().enumerate() {
+    for (k, g) in radiance
+        .sensor_grids
+        .unwrap_or_default()
+        .into_iter()
+        .enumerate()
+    {
         let ctx = || format!("sensor grid {}", k + 1);
         b.grid(g, &ctx)?;
     }
@@ -232,6 +267,8 @@ enum Parent<'a> {
 
 struct Builder {
     path: PathBuf,
+    /// The model's identifier.
+    model: String,
     units: Units,
     tol_m: f64,
     mods: Modifiers,
@@ -253,7 +290,10 @@ impl Builder {
         kind: &str,
         ctx: &dyn Fn() -> String,
     ) -> Result<T> {
-        let id = v.get("identifier").and_then(Value::as_str).map(str::to_owned);
+        let id = v
+            .get("identifier")
+            .and_then(Value::as_str)
+            .map(str::to_owned);
         serde_json::from_value(v).map_err(|e| match &id {
             Some(id) => Error::input(&self.path, None, Some(id), format!("{kind} `{id}`: {e}")),
             None => Error::input(
@@ -267,7 +307,12 @@ impl Builder {
 
     fn bad(&self, who: Who, message: impl std::fmt::Display) -> Error {
         let (id, kind) = who;
-        Error::input(&self.path, None, Some(id), format!("{kind} `{id}`: {message}"))
+        Error::input(
+            &self.path,
+            None,
+            Some(id),
+            format!("{kind} `{id}`: {message}"),
+        )
     }
 
     /// A point in metres; an error naming `who` when it is not finite.
@@ -352,13 +397,11 @@ impl Builder {
         let group = self.out.groups.len() as u32;
         self.out.groups.push(id.to_string());
         self.group_room.push(room);
-        self.out
-            .triangles
-            .extend(t.triangles.into_iter().map(|v| Triangle {
-                v,
-                material,
-                group,
-            }));
+        self.out.triangles.extend(
+            t.triangles
+                .into_iter()
+                .map(|v| Triangle { v, material, group }),
+        );
     }
 
     /// The material of an object: its own modifier, else `fallback`'s.
@@ -394,7 +437,12 @@ impl Builder {
             self.face(f, r, &ctx)?;
         }
         let shades = room.indoor_shades.into_iter().flatten().map(|s| (s, true));
-        let shades = shades.chain(room.outdoor_shades.into_iter().flatten().map(|s| (s, false)));
+        let shades = shades.chain(
+            room.outdoor_shades
+                .into_iter()
+                .flatten()
+                .map(|s| (s, false)),
+        );
         for (j, (s, indoor)) in shades.enumerate() {
             let ctx = || format!("shade {} of room `{}`", j + 1, room.identifier);
             self.shade(s, Some(index), Parent::Set(set.as_deref()), indoor, &ctx)?;
@@ -455,7 +503,11 @@ impl Builder {
             .chain(f.doors.into_iter().flatten().map(|d| (d, SubKind::Door)));
         let mut kept = Vec::new();
         for (j, (v, kind)) in subs.enumerate() {
-            let name = if kind == SubKind::Aperture { "Aperture" } else { "Door" };
+            let name = if kind == SubKind::Aperture {
+                "Aperture"
+            } else {
+                "Door"
+            };
             let ctx = || format!("sub-face {} of face `{}`", j + 1, f.identifier);
             let s: SubFaceJ = self.parse(v, name, &ctx)?;
             let (outline, _) = self.face3d(&s.geometry, (&s.identifier, name))?;
@@ -474,7 +526,11 @@ impl Builder {
             kept.push((s, kind));
         }
         if let Some(slot) = slot {
-            let own = f.properties.radiance.as_ref().and_then(|r| r.modifier.clone());
+            let own = f
+                .properties
+                .radiance
+                .as_ref()
+                .and_then(|r| r.modifier.clone());
             let fallback = self.mods.from_set(set, slot);
             let material = self.material(own.as_deref(), fallback, who)?;
             if second && self.tol_m > 0.0 {
@@ -512,7 +568,11 @@ impl Builder {
         parent_type: &str,
         room: Option<(u32, Option<&str>)>,
     ) -> Result<()> {
-        let name = if kind == SubKind::Aperture { "Aperture" } else { "Door" };
+        let name = if kind == SubKind::Aperture {
+            "Aperture"
+        } else {
+            "Door"
+        };
         let who: Who = (&s.identifier, name);
         let (room_index, set) = room.map_or((None, None), |(i, s)| (Some(i), s));
         let outdoors = match s.boundary_condition.kind.as_str() {
@@ -617,7 +677,11 @@ impl Builder {
     fn shade_mesh(&mut self, v: Value, ctx: &dyn Fn() -> String) -> Result<()> {
         let s: ShadeMeshJ = self.parse(v, "ShadeMesh", ctx)?;
         let who: Who = (&s.identifier, "ShadeMesh");
-        let own = s.properties.radiance.as_ref().and_then(|r| r.modifier.clone());
+        let own = s
+            .properties
+            .radiance
+            .as_ref()
+            .and_then(|r| r.modifier.clone());
         let fallback = if s.is_detached {
             self.mods.context()
         } else {
@@ -651,11 +715,7 @@ impl Builder {
             let t = triangulate(&ring, &[], 0.0);
             for v in t.triangles {
                 any = true;
-                self.out.triangles.push(Triangle {
-                    v,
-                    material,
-                    group,
-                });
+                self.out.triangles.push(Triangle { v, material, group });
             }
         }
         if any {
@@ -756,6 +816,18 @@ impl Builder {
     }
 
     fn finish(mut self) -> Result<HbjsonContents> {
+        if self.out.triangles.is_empty() {
+            return Err(Error::input(
+                &self.path,
+                None,
+                Some(&self.model),
+                format!(
+                    "Model `{}` has no geometry daystep can use (rooms, faces, apertures, \
+                     doors or shades with area)",
+                    self.model
+                ),
+            ));
+        }
         let counts: ImportCounts = self.out.imported.counts;
         let totals = [
             counts.zero_area,

@@ -119,12 +119,15 @@ const LIBRARY: [(&str, Lib); 17] = [
 
 /// The library modifier `id` as honeybee writes it in a model, if there is one.
 fn library(id: &str) -> Option<Value> {
-    LIBRARY.iter().find(|(k, _)| *k == id).map(|(k, m)| match m {
-        Lib::Plastic(r) => json!({"type": "Plastic", "identifier": k, "r_reflectance": r,
+    LIBRARY
+        .iter()
+        .find(|(k, _)| *k == id)
+        .map(|(k, m)| match m {
+            Lib::Plastic(r) => json!({"type": "Plastic", "identifier": k, "r_reflectance": r,
             "g_reflectance": r, "b_reflectance": r, "specularity": 0.0, "roughness": 0.0}),
-        Lib::Glass(t) => json!({"type": "Glass", "identifier": k, "r_transmissivity": t,
+            Lib::Glass(t) => json!({"type": "Glass", "identifier": k, "r_transmissivity": t,
             "g_transmissivity": t, "b_transmissivity": t}),
-    })
+        })
 }
 
 /// A modifier set resolved to identifiers, slot by slot (missing slots fall back).
@@ -178,13 +181,25 @@ impl Modifiers {
             warnings: Vec::new(),
         };
         for (k, v) in modifiers.into_iter().enumerate() {
-            m.define(v, &format!("modifier {} of properties.radiance.modifiers", k + 1))?;
+            m.define(
+                v,
+                &format!("modifier {} of properties.radiance.modifiers", k + 1),
+            )?;
         }
         if let Some(g) = global {
             let set: ModifierSetJ = serde_json::from_value(g).map_err(|e| {
-                m.err("global_modifier_set", format!("invalid global_modifier_set: {e}"))
+                m.err(
+                    "global_modifier_set",
+                    format!("invalid global_modifier_set: {e}"),
+                )
             })?;
-            for (k, v) in set.modifiers.clone().unwrap_or_default().into_iter().enumerate() {
+            for (k, v) in set
+                .modifiers
+                .clone()
+                .unwrap_or_default()
+                .into_iter()
+                .enumerate()
+            {
                 m.define(v, &format!("modifier {} of global_modifier_set", k + 1))?;
             }
             if let Some(c) = &set.context_modifier {
@@ -194,7 +209,10 @@ impl Modifiers {
             m.global.extend(slots);
         }
         for (k, v) in sets.into_iter().enumerate() {
-            let where_ = format!("modifier set {} of properties.radiance.modifier_sets", k + 1);
+            let where_ = format!(
+                "modifier set {} of properties.radiance.modifier_sets",
+                k + 1
+            );
             let set: ModifierSetJ = serde_json::from_value(v)
                 .map_err(|e| m.err(&where_, format!("invalid modifier set: {e}")))?;
             let Some(id) = set.identifier.clone() else {
@@ -212,7 +230,11 @@ impl Modifiers {
 
     /// Records a modifier definition by its identifier.
     fn define(&mut self, v: Value, where_: &str) -> Result<String> {
-        let Some(id) = v.get("identifier").and_then(Value::as_str).map(str::to_owned) else {
+        let Some(id) = v
+            .get("identifier")
+            .and_then(Value::as_str)
+            .map(str::to_owned)
+        else {
             return Err(self.err(where_, "modifier has no identifier"));
         };
         self.defs.insert(id.clone(), v);
@@ -313,8 +335,7 @@ impl Modifiers {
         let Some(v) = self.defs.get(id).cloned().or_else(|| library(id)) else {
             return Err(fail(
                 self,
-                "is not defined in properties.radiance.modifiers nor in honeybee's library"
-                    .into(),
+                "is not defined in properties.radiance.modifiers nor in honeybee's library".into(),
             ));
         };
         let parsed: ModifierJ =
@@ -367,10 +388,7 @@ fn opaque(id: &str, kd: Rgb) -> std::result::Result<Material, String> {
 
 /// The material of one modifier and the approximation made, if any; `Err` says why it
 /// cannot be modelled.
-fn convert(
-    id: &str,
-    m: ModifierJ,
-) -> std::result::Result<(Material, Option<String>), String> {
+fn convert(id: &str, m: ModifierJ) -> std::result::Result<(Material, Option<String>), String> {
     let modified = "is itself modified by another modifier (a pattern, texture or mixture), \
                     which daystep cannot model; remove the modifier chain";
     let too_specular = |kind: &str, s: f64| {
@@ -385,10 +403,15 @@ fn convert(
             Err(modified.into())
         }
         ModifierJ::Plastic(p) => {
-            let c = channels("reflectance", [p.r_reflectance, p.g_reflectance, p.b_reflectance])?;
+            let c = channels(
+                "reflectance",
+                [p.r_reflectance, p.g_reflectance, p.b_reflectance],
+            )?;
             let s = p.specularity;
             if !(s.is_finite() && s >= 0.0) {
-                return Err(format!("has specularity {s}: it must be a number in [0, 1]"));
+                return Err(format!(
+                    "has specularity {s}: it must be a number in [0, 1]"
+                ));
             }
             if s > MAX_SPECULARITY {
                 return Err(too_specular("plastic", s));
@@ -404,10 +427,15 @@ fn convert(
             Ok((m, w))
         }
         ModifierJ::Metal(p) => {
-            let c = channels("reflectance", [p.r_reflectance, p.g_reflectance, p.b_reflectance])?;
+            let c = channels(
+                "reflectance",
+                [p.r_reflectance, p.g_reflectance, p.b_reflectance],
+            )?;
             let s = p.specularity;
             if !(s.is_finite() && s >= 0.0) {
-                return Err(format!("has specularity {s}: it must be a number in [0, 1]"));
+                return Err(format!(
+                    "has specularity {s}: it must be a number in [0, 1]"
+                ));
             }
             if s > MAX_SPECULARITY {
                 return Err(too_specular("metal", s));
@@ -426,7 +454,10 @@ fn convert(
             if !unmodified(&t.modifier) {
                 return Err(modified.into());
             }
-            let c = channels("reflectance", [t.r_reflectance, t.g_reflectance, t.b_reflectance])?;
+            let c = channels(
+                "reflectance",
+                [t.r_reflectance, t.g_reflectance, t.b_reflectance],
+            )?;
             let s = t.specularity;
             if t.transmitted_diff != 0.0 {
                 return Err(format!(
@@ -443,8 +474,7 @@ fn convert(
             Ok((
                 m,
                 Some(
-                    "(trans with transmitted_diff 0): read as plastic, it transmits nothing"
-                        .into(),
+                    "(trans with transmitted_diff 0): read as plastic, it transmits nothing".into(),
                 ),
             ))
         }
@@ -462,7 +492,10 @@ fn convert(
             )?;
             let tf = Rgb::from_array(t.to_array().map(glass_transmittance_from_transmissivity));
             let mut notes = Vec::new();
-            if let Some(n) = g.refraction_index.filter(|n| *n != 0.0 && *n != GLASS_INDEX) {
+            if let Some(n) = g
+                .refraction_index
+                .filter(|n| *n != 0.0 && *n != GLASS_INDEX)
+            {
                 notes.push(format!(
                     "has refraction index {n}: daystep's glazing has {GLASS_INDEX}"
                 ));
@@ -476,7 +509,10 @@ fn convert(
                 tf,
                 ke: Rgb::ZERO,
             };
-            Ok((m, (!notes.is_empty()).then(|| format!("(glass) {}", notes.join("; ")))))
+            Ok((
+                m,
+                (!notes.is_empty()).then(|| format!("(glass) {}", notes.join("; "))),
+            ))
         }
         ModifierJ::Glow(e) | ModifierJ::Light(e) => {
             if !unmodified(&e.modifier) {

@@ -248,21 +248,27 @@ mod tests {
     #[test]
     fn transmissivity_round_trips_through_radiance_formula() {
         // Radiance's own conversion (its glass documentation), written out.
-        let radiance =
-            |tn: f64| ((0.8402528435 + 0.0072522239 * tn * tn).sqrt() - 0.9166530661) / 0.0036261119 / tn;
-        for tn in [0.01, 0.2, 0.64, 0.88, 0.9] {
+        let radiance = |tn: f64| {
+            ((0.8402528435 + 0.0072522239 * tn * tn).sqrt() - 0.9166530661) / 0.0036261119 / tn
+        };
+        // Its ten-digit constants cancel at small tn: 1e-6 at tn = 0.05.
+        for tn in [0.05, 0.2, 0.64, 0.88, 0.9] {
             let t = radiance(tn);
             let back = glass_transmittance_from_transmissivity(t);
-            assert!((back - tn).abs() < 1e-8, "{tn}: {t} -> {back}");
-            assert!((transmissivity(tn) - t).abs() < 1e-8);
+            assert!((back - tn).abs() < 1e-6, "{tn}: {t} -> {back}");
+            assert!((transmissivity(tn) - t).abs() < 1e-6);
         }
         // Honeybee's generic exterior window: transmittance 0.64 written as 0.6975761815…
         let hb = glass_transmittance_from_transmissivity(0.6975761815384331);
-        assert!((hb - 0.64).abs() < 1e-9, "{hb}");
+        // (honeybee computed it with the ten-digit formula: within 1e-7.)
+        assert!((hb - 0.64).abs() < 1e-7, "{hb}");
         assert_eq!(glass_transmittance_from_transmissivity(0.0), 0.0);
         assert_eq!(glass_transmittance_from_transmissivity(f64::NAN), 0.0);
         let one = glass_transmittance_from_transmissivity(1.0);
-        assert!((one - (1.0 - 0.0426) / (1.0 + 0.0426)).abs() < 1e-3, "{one}");
+        assert!(
+            (one - (1.0 - 0.0426) / (1.0 + 0.0426)).abs() < 1e-3,
+            "{one}"
+        );
     }
 
     #[test]

@@ -241,14 +241,12 @@ fn parse(path: &Path, text: &str) -> Result<Parsed> {
     };
     let geometry = match &raw.geometry {
         Some(g) => file("geometry", g)?,
-        None => {
-            return Err(Error::input(
-                path,
-                None,
-                None,
-                "missing required key `geometry` (the OBJ or HBJSON file, relative to the scene file)",
-            ))
-        }
+        None => return Err(Error::input(
+            path,
+            None,
+            None,
+            "missing required key `geometry` (the OBJ or HBJSON file, relative to the scene file)",
+        )),
     };
     let sensors = raw
         .sensors
