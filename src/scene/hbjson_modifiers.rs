@@ -300,7 +300,7 @@ impl Modifiers {
 
     /// The modifier identifier of `slot` in set `set` (a room's), falling back to the
     /// global set.
-    pub fn from_set(&self, set: Option<&str>, slot: Slot) -> String {
+    pub fn set_modifier(&self, set: Option<&str>, slot: Slot) -> String {
         set.and_then(|s| self.sets.get(s))
             .and_then(|s| s.get(&slot))
             .or_else(|| self.global.get(&slot))

@@ -58,7 +58,7 @@ fn square_with_hole_is_outer_minus_hole_for_either_hole_winding() {
     let hole = xy(&[(1.0, 1.0), (2.0, 1.0), (2.0, 3.0), (1.0, 3.0)]);
     let reversed: Vec<DVec3> = hole.iter().rev().copied().collect();
     for h in [hole, reversed] {
-        let t = triangulate(&outer, &[h.clone()], 0.01);
+        let t = triangulate(&outer, std::slice::from_ref(&h), 0.01);
         assert!(t.issues.is_empty(), "{:?}", t.issues);
         assert!((area(&t) - (16.0 - 2.0)).abs() < 1e-12, "{}", area(&t));
         // Nothing inside the hole: no triangle's centroid lies in it.
