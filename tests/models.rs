@@ -123,6 +123,15 @@ fn hbjson_as_geometry_and_as_scene() {
     assert_eq!(alone.triangles, scene.triangles);
     assert_eq!(alone.sensors, scene.sensors);
 
+    // `up` does not apply to a honeybee model.
+    std::fs::write(
+        &s,
+        format!("geometry = \"model.hbjson\"\nup = \"y\"\n{SITE}"),
+    )
+    .unwrap();
+    let e = Scene::load(&s).unwrap_err().to_string();
+    assert!(e.contains("scene.toml:2") && e.contains("Z-up"), "{e}");
+
     // Millimetres: the same scene.
     let (m, _) = write(dir.path(), &roof_opening(1.0, "Millimeters", 1000.0), None);
     let mm = Scene::load(&m).unwrap();

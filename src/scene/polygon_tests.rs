@@ -289,6 +289,26 @@ proptest! {
     }
 
     #[test]
+    fn extreme_and_repeated_points_never_panic(
+        pts in proptest::collection::vec(
+            (0usize..6, prop_oneof![Just(1.0), Just(1e-300), Just(1e300), Just(-1e150)]),
+            0..30,
+        ),
+        holes in proptest::collection::vec(proptest::collection::vec(0usize..6, 0..6), 0..3),
+    ) {
+        // Few distinct points: many repeats, collinear runs, holes equal to the outline.
+        let grid = [p(0.0, 0.0, 0.0), p(1.0, 0.0, 0.0), p(1.0, 1.0, 0.0), p(0.0, 1.0, 0.0),
+            p(0.5, 0.5, 0.0), p(2.0, 0.0, 0.0)];
+        let ring: Vec<DVec3> = pts.iter().map(|&(i, k)| grid[i] * k).collect();
+        let holes: Vec<Vec<DVec3>> =
+            holes.iter().map(|h| h.iter().map(|&i| grid[i]).collect()).collect();
+        let t = triangulate(&ring, &holes, 0.01);
+        for [a, b, c] in &t.triangles {
+            prop_assert!(a.is_finite() && b.is_finite() && c.is_finite());
+        }
+    }
+
+    #[test]
     fn simple_polygons_cover_their_area(
         jitter in proptest::collection::vec(0.0..0.9f64, 4..40),
         radii in proptest::collection::vec(0.2..1.0f64, 40),
