@@ -58,7 +58,7 @@ pub struct HbjsonContents {
 /// has none) for malformed JSON (with line and column), a value of the wrong type, a
 /// missing identifier, unknown units, non-finite coordinates, an unknown face type, a
 /// room referring to an undefined modifier set, and any modifier daystep cannot model
-/// (see [`super::hbjson_modifiers`]); [`Error::Io`] when the file cannot be read.
+/// (docs/models.md); [`Error::Io`] when the file cannot be read.
 pub fn load(path: &Path) -> Result<HbjsonContents> {
     let text = files::read_text(path)?;
     parse(path, &text)
