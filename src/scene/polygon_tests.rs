@@ -151,6 +151,44 @@ fn bow_tie_is_self_intersecting() {
 }
 
 #[test]
+fn a_door_touching_the_wall_bottom_is_cut_out() {
+    // The door's sill lies on the wall's bottom edge, as honeybee doors do; and a window
+    // touching a wall's corner.
+    let wall = xy(&[(0.0, 0.0), (4.0, 0.0), (4.0, 3.0), (0.0, 3.0)]);
+    let door = xy(&[(1.0, 0.0), (2.0, 0.0), (2.0, 2.0), (1.0, 2.0)]);
+    let corner = xy(&[(3.0, 2.0), (4.0, 2.0), (4.0, 3.0), (3.0, 3.0)]);
+    for holes in [vec![door.clone()], vec![door, corner]] {
+        let t = triangulate(&wall, &holes, 0.01);
+        assert!(t.issues.is_empty(), "{:?}", t.issues);
+        let want = 12.0 - holes.iter().map(|h| shoelace(h)).sum::<f64>();
+        assert!((area(&t) - want).abs() < 1e-12, "{} vs {want}", area(&t));
+        assert!(encloses(&wall, &[], &holes[0], 0.01));
+    }
+}
+
+#[test]
+fn encloses_needs_the_plane_the_outline_and_no_hole() {
+    let wall = xy(&SQUARE);
+    let win = xy(&[(1.0, 1.0), (2.0, 1.0), (2.0, 2.0), (1.0, 2.0)]);
+    assert!(encloses(&wall, &[], &win, 0.01));
+    // Within tolerance of the plane and of the outline.
+    let near: Vec<DVec3> = win.iter().map(|v| *v + p(2.005, 0.0, 0.005)).collect();
+    assert!(encloses(&wall, &[], &near, 0.01));
+    let off_plane: Vec<DVec3> = win.iter().map(|v| *v + p(0.0, 0.0, 0.5)).collect();
+    assert!(!encloses(&wall, &[], &off_plane, 0.01));
+    let beyond: Vec<DVec3> = win.iter().map(|v| *v + p(2.5, 0.0, 0.0)).collect();
+    assert!(!encloses(&wall, &[], &beyond, 0.01));
+    let hole = xy(&[(0.5, 0.5), (2.5, 0.5), (2.5, 2.5), (0.5, 2.5)]);
+    assert!(!encloses(&wall, &[hole], &win, 0.01));
+    assert!(!encloses(
+        &xy(&[(0.0, 0.0), (1.0, 0.0), (2.0, 0.0)]),
+        &[],
+        &win,
+        0.01
+    ));
+}
+
+#[test]
 fn a_seam_joining_a_hole_is_not_self_intersecting() {
     // The outline walks in to the hole along x = 0..1 at y = 1 and back out along the same
     // line, as exporters write a face with a hole as one polygon.
