@@ -16,6 +16,8 @@ mod extremes; // low sun, polar day and night, turbidity limits, slivers, far co
 mod imagesky; // HDR image skies: uniform image πL, images of the CIE overcast sky in both mappings
 mod generated_scenes; // the generated office and building: areas, normals, closure, triangle target, bundled files
 mod layers; // the layer rule of lib.rs: lower layers never import higher ones
+mod model_outputs; // a Honeybee model through the binary: grid column, --grids, per-grid annual outputs, --view-name
+mod models; // Honeybee HBJSON: as geometry and as SCENE, grids as sensors, mm = m, sky through a roof hole, exit 1 naming the object
 mod outputs; // outputs checked before the work; a resumed render keeps only frames of the same inputs
 mod parsers; // every parser under arbitrary and mutated input: no panic, hang or unbounded allocation
 mod render; // renders against closed forms: ρL, ρE cos θ/π, τ(θ)L, -i, threads

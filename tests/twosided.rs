@@ -92,6 +92,7 @@ fn remodel(scene: &Scene, flip: bool, faces: Faces) -> Scene {
         site: scene.site,
         ground_reflectance: scene.ground_reflectance,
         faces,
+        imported: Default::default(),
     };
     Scene::from_model(Path::new("<remodelled>"), input).expect("a valid scene stays valid")
 }

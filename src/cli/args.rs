@@ -88,7 +88,7 @@ pub enum Command {
 #[derive(Args, Debug)]
 #[command(allow_negative_numbers = true)]
 pub struct InstantArgs {
-    /// The scene file (scene.toml).
+    /// The scene file (scene.toml), or a Honeybee model (.hbjson) with the default site.
     pub scene: PathBuf,
     /// Local standard time of the site, YYYY-MM-DDTHH:MM[:SS], or RFC 3339.
     // The help text is the doc comment, so its brackets stay unescaped for rustdoc.
@@ -147,7 +147,7 @@ pub struct SkyParams {
 #[derive(Args, Debug)]
 #[command(allow_negative_numbers = true)]
 pub struct RenderArgs {
-    /// The scene file (scene.toml).
+    /// The scene file (scene.toml), or a Honeybee model (.hbjson) with the default site.
     pub scene: PathBuf,
     /// The camera as Radiance view options, quoted: "-vtv -vp 3 7 1.5 -vd 0 -1 0 -vh 60
     /// -vv 45" (types -vtv, -vta, -vth, -vtl). Applied after --vf.
@@ -258,7 +258,8 @@ pub struct MergeArgs {
 #[derive(Args, Debug)]
 #[command(allow_negative_numbers = true)]
 pub struct DfArgs {
-    /// The scene file (scene.toml); it must name a sensors file.
+    /// The scene file (scene.toml), which must name a sensors file, or a Honeybee model
+    /// (.hbjson) with sensor grids.
     pub scene: PathBuf,
     /// Output folder (df.csv, report.json).
     #[arg(long)]
@@ -301,7 +302,8 @@ pub struct RunArgs {
 #[command(mut_arg("dni", |a| a.help("Direct-normal irradiance, W/m² (perez, cie)")))]
 #[command(mut_arg("turbidity", |a| a.help("Preetham turbidity")))]
 pub struct ConvergenceArgs {
-    /// The scene file (scene.toml); it must name a sensors file.
+    /// The scene file (scene.toml), which must name a sensors file, or a Honeybee model
+    /// (.hbjson) with sensor grids.
     pub scene: PathBuf,
     /// Output folder (convergence.csv, convergence.svg, report.json).
     #[arg(long)]
@@ -339,7 +341,7 @@ pub struct ConvergenceArgs {
 #[derive(Args, Debug)]
 #[command(allow_negative_numbers = true)]
 pub struct AnnualArgs {
-    /// The scene file (scene.toml).
+    /// The scene file (scene.toml), or a Honeybee model (.hbjson) with the default site.
     pub scene: PathBuf,
     /// Only these sensor grids of an HBJSON model: identifiers or globs, comma-separated
     /// ("Room_1*,Core_Grid"); default: every grid.

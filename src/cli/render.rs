@@ -20,10 +20,11 @@ use std::path::Path;
 fn view(a: &RenderArgs, scene: Option<&Scene>) -> Result<View> {
     let mut v = View::default();
     if let (Some(name), Some(scene)) = (&a.view_name, scene) {
-        v = match scene.views.iter().find(|(n, _)| n == name) {
-            Some((_, view)) => *view,
+        let views = &scene.imported.views;
+        v = match views.iter().find(|v| &v.identifier == name) {
+            Some(named) => named.view,
             None => {
-                let names: Vec<&str> = scene.views.iter().map(|(n, _)| n.as_str()).collect();
+                let names: Vec<&str> = views.iter().map(|v| v.identifier.as_str()).collect();
                 return Err(Error::arg(
                     "--view-name",
                     name,

@@ -1,6 +1,7 @@
 //! Named sensor grids (HBJSON `sensor_grids`): which of a scene's sensors belong to which
 //! grid and room, and the selection of grids a run is asked for (`--grids`).
 
+use super::imported::Imported;
 use super::Scene;
 use crate::error::{Error, Result};
 
@@ -13,6 +14,26 @@ pub struct SensorGrid {
     pub room: Option<String>,
     /// Its sensors: an index range into [`Scene::sensors`].
     pub sensors: std::ops::Range<usize>,
+}
+
+/// The grids whose sensors a reader gave as the scene's sensors
+/// ([`Imported::sensor_grid`]): each run of sensors of one grid, in order.
+pub fn from_imported(imported: &Imported) -> Vec<SensorGrid> {
+    let mut grids: Vec<SensorGrid> = Vec::new();
+    for (i, &g) in imported.sensor_grid.iter().enumerate() {
+        let info = &imported.grids[g as usize];
+        match grids.last_mut() {
+            Some(last) if last.identifier == info.identifier && last.sensors.end == i => {
+                last.sensors.end = i + 1;
+            }
+            _ => grids.push(SensorGrid {
+                identifier: info.identifier.clone(),
+                room: info.room.clone(),
+                sensors: i..i + 1,
+            }),
+        }
+    }
+    grids
 }
 
 /// Keeps only the sensors of the grids whose identifiers match one of `patterns`

@@ -159,6 +159,19 @@ fn fold_cos(cos_incidence: f64) -> f64 {
     }
 }
 
+/// Normal-incidence transmittance of a Radiance `glass` whose argument (internal
+/// transmissivity) is `t` ∈ [0, 1]: the inverse of Radiance's transmittance →
+/// transmissivity conversion used by [`glass_transmittance`] (its `tn` is this value), for
+/// readers of models that give `glass` as Radiance does. Equals
+/// (1 − r₀)² t / (1 − r₀² t²) with r₀ the normal-incidence Fresnel reflectance of one
+/// surface at n = 1.52. NaN and values outside [0, 1] are clamped (NaN → 0).
+pub fn glass_transmittance_from_transmissivity(t: f64) -> f64 {
+    if t.is_nan() {
+        return 0.0;
+    }
+    pane(t.clamp(0.0, 1.0), 1.0)
+}
+
 /// Radiance's internal transmissivity of a pane of normal-incidence transmittance
 /// `tn` ∈ (0, 1], rationalised (A = C²) so small `tn` suffers no cancellation; it equals
 /// Radiance's expression to ~1e-8.
@@ -230,6 +243,32 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn transmissivity_round_trips_through_radiance_formula() {
+        // Radiance's own conversion (its glass documentation), written out.
+        let radiance = |tn: f64| {
+            ((0.8402528435 + 0.0072522239 * tn * tn).sqrt() - 0.9166530661) / 0.0036261119 / tn
+        };
+        // Its ten-digit constants cancel at small tn: 1e-6 at tn = 0.05.
+        for tn in [0.05, 0.2, 0.64, 0.88, 0.9] {
+            let t = radiance(tn);
+            let back = glass_transmittance_from_transmissivity(t);
+            assert!((back - tn).abs() < 1e-6, "{tn}: {t} -> {back}");
+            assert!((transmissivity(tn) - t).abs() < 1e-6);
+        }
+        // Honeybee's generic exterior window: transmittance 0.64 written as 0.6975761815…
+        let hb = glass_transmittance_from_transmissivity(0.6975761815384331);
+        // (honeybee computed it with the ten-digit formula: within 1e-7.)
+        assert!((hb - 0.64).abs() < 1e-7, "{hb}");
+        assert_eq!(glass_transmittance_from_transmissivity(0.0), 0.0);
+        assert_eq!(glass_transmittance_from_transmissivity(f64::NAN), 0.0);
+        let one = glass_transmittance_from_transmissivity(1.0);
+        assert!(
+            (one - (1.0 - 0.0426) / (1.0 + 0.0426)).abs() < 1e-3,
+            "{one}"
+        );
     }
 
     #[test]

@@ -4,9 +4,14 @@
 
 pub mod faces;
 pub mod grids;
+pub mod hbjson;
+mod hbjson_modifiers;
+mod hbjson_schema;
+pub mod imported;
 pub mod junctions;
 pub mod material;
 pub mod obj;
+pub mod polygon;
 mod mtl;
 pub mod scene_file;
 pub mod sensors;
@@ -100,14 +105,15 @@ pub struct Scene {
     /// What cutting surfaces along the feet of walls standing on them did
     /// ([`junctions::split_at_junctions`]).
     pub junctions: junctions::JunctionReport,
+    /// What the model file gave besides geometry (HBJSON: rooms, sensor grids with the
+    /// grid of each sensor, named views, aperture groups, counts of bad geometry); empty
+    /// for OBJ.
+    pub imported: imported::Imported,
     /// Non-fatal remarks about the input (unknown MTL keys, …), each once.
     pub warnings: Vec<String>,
-    /// The model's named sensor grids, in model order (empty unless the model has them).
+    /// The model's named sensor grids with their sensors, in model order (empty unless the
+    /// model's grids are the sensors); `--grids` narrows them.
     pub grids: Vec<SensorGrid>,
-    /// The model's named views (identifier, view), in model order.
-    pub views: Vec<(String, view::View)>,
-    /// The model's aperture groups: (group identifier, identifiers of its apertures).
-    pub aperture_groups: Vec<(String, Vec<String>)>,
 }
 
 impl Scene {
@@ -282,6 +288,9 @@ pub struct ModelInput {
     pub ground_reflectance: f64,
     /// Which faces of opaque surfaces reflect.
     pub faces: Faces,
+    /// What the model file gave besides geometry ([`Scene::imported`]);
+    /// `imported.sensor_grid` is empty or has one entry per sensor.
+    pub imported: imported::Imported,
 }
 
 /// Converts a Y-up point to Z-up: (x, y, z) → (x, −z, y) (glTF/Blender convention).
@@ -410,6 +419,15 @@ impl Scene {
                 input_position: *p,
             });
         }
+        if !input.imported.sensor_grid.is_empty()
+            && input.imported.sensor_grid.len() != input.sensors.len()
+        {
+            return Err(Error::Internal(format!(
+                "{} sensors but {} sensor grid indices",
+                input.sensors.len(),
+                input.imported.sensor_grid.len()
+            )));
+        }
         let input_triangles = triangles.len();
         let mut scene = Scene {
             path: path.to_path_buf(),
@@ -427,11 +445,11 @@ impl Scene {
             y_up: false,
             dropped_degenerate: dropped,
             junctions,
+            imported: input.imported,
             warnings: Vec::new(),
             grids: Vec::new(),
-            views: Vec::new(),
-            aperture_groups: Vec::new(),
         };
+        scene.grids = grids::from_imported(&scene.imported);
         if input.faces == Faces::Both {
             faces::add_back_faces(&mut scene);
         }

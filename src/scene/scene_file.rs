@@ -4,7 +4,7 @@
 //! Unknown keys are not errors but warnings, so files written for a newer daystep still load.
 //! Values are read as [`toml::Spanned`] so that range errors name their line.
 
-use super::{obj, sensors, Faces, ModelInput, Scene};
+use super::{hbjson, obj, sensors, Faces, ModelInput, Scene};
 use crate::error::{Error, Result};
 use crate::files;
 use crate::site::Site;
@@ -68,31 +68,36 @@ struct SiteToml {
 /// non-finite (TOML spells `nan` and `inf`), `up` not "z" or "y"), and every error of
 /// [`obj::load`] and [`sensors::load`]. [`Error::Io`] when a file cannot be read.
 pub fn load(path: &Path) -> Result<Scene> {
-    let parsed = if is_model_file(path) {
+    let parsed = if is_hbjson(path) {
         model_alone(path)
     } else {
         let text = files::read_text(path)?;
         parse(path, &text)?
     };
-    let (triangles, materials, groups, obj_warnings) = obj::load(&parsed.geometry, parsed.y_up)?;
+    let mut geometry = read_geometry(&parsed.geometry, parsed.y_up)?;
     let sensors = match &parsed.sensors {
-        Some(p) => sensors::load(p, parsed.y_up)?,
-        None => Vec::new(),
+        Some(p) => {
+            // The .pts file replaces the model's grids as the sensors.
+            geometry.imported.sensor_grid.clear();
+            sensors::load(p, parsed.y_up)?
+        }
+        None => geometry.sensors,
     };
     let input = ModelInput {
-        triangles,
-        materials,
-        groups,
+        triangles: geometry.triangles,
+        materials: geometry.materials,
+        groups: geometry.groups,
         sensors,
         north_deg: parsed.north_deg,
         site: parsed.site,
         ground_reflectance: parsed.ground_reflectance,
         faces: parsed.faces,
+        imported: geometry.imported,
     };
     let mut scene = Scene::from_model(path, input)?;
     scene.y_up = parsed.y_up;
     let mut warnings = parsed.warnings;
-    warnings.extend(obj_warnings);
+    warnings.extend(geometry.warnings);
     // Each remark once, in order of appearance.
     let mut seen = std::collections::HashSet::new();
     warnings.retain(|w| seen.insert(w.clone()));
@@ -100,11 +105,46 @@ pub fn load(path: &Path) -> Result<Scene> {
     Ok(scene)
 }
 
-/// True for a model file given where a scene file is expected (an HBJSON, `.hbjson`).
-pub fn is_model_file(path: &Path) -> bool {
+/// True when `path` names a Honeybee model (`.hbjson`, or `.json` as honeybee also writes).
+pub fn is_hbjson(path: &Path) -> bool {
     path.extension()
         .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("hbjson"))
+        .is_some_and(|e| e.eq_ignore_ascii_case("hbjson") || e.eq_ignore_ascii_case("json"))
+}
+
+/// What a geometry file gives, whatever its format.
+struct Geometry {
+    triangles: Vec<super::Triangle>,
+    materials: Vec<super::Material>,
+    groups: Vec<String>,
+    /// The model's own sensors (HBJSON grids), model frame.
+    sensors: Vec<(glam::DVec3, glam::DVec3)>,
+    imported: super::imported::Imported,
+    warnings: Vec<String>,
+}
+
+/// Reads the geometry file by its extension: HBJSON, else OBJ.
+fn read_geometry(path: &Path, y_up: bool) -> Result<Geometry> {
+    if is_hbjson(path) {
+        let h = hbjson::load(path)?;
+        return Ok(Geometry {
+            triangles: h.triangles,
+            materials: h.materials,
+            groups: h.groups,
+            sensors: h.sensors,
+            imported: h.imported,
+            warnings: h.warnings,
+        });
+    }
+    let (triangles, materials, groups, warnings) = obj::load(path, y_up)?;
+    Ok(Geometry {
+        triangles,
+        materials,
+        groups,
+        sensors: Vec::new(),
+        imported: Default::default(),
+        warnings,
+    })
 }
 
 /// The scene of a model given alone: its own geometry and sensor grids, the defaults of
@@ -190,14 +230,12 @@ fn parse(path: &Path, text: &str) -> Result<Parsed> {
     };
     let geometry = match &raw.geometry {
         Some(g) => file("geometry", g)?,
-        None => {
-            return Err(Error::input(
-                path,
-                None,
-                None,
-                "missing required key `geometry` (the OBJ file, relative to the scene file)",
-            ))
-        }
+        None => return Err(Error::input(
+            path,
+            None,
+            None,
+            "missing required key `geometry` (the OBJ or HBJSON file, relative to the scene file)",
+        )),
     };
     let sensors = raw
         .sensors
@@ -220,6 +258,15 @@ fn parse(path: &Path, text: &str) -> Result<Parsed> {
             }
         },
     };
+
+    if let Some(u) = raw.up.as_ref().filter(|_| y_up && is_hbjson(&geometry)) {
+        return Err(Error::input(
+            path,
+            at(u.span()),
+            Some(u.get_ref()),
+            "`up` does not apply to a Honeybee model (HBJSON is always Z-up): remove it",
+        ));
+    }
 
     let faces = match &raw.faces {
         None => Faces::Both,

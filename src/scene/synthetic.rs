@@ -432,6 +432,7 @@ impl SceneBuilder {
                 site: self.site,
                 ground_reflectance: self.ground_reflectance,
                 faces: self.faces,
+                imported: Default::default(),
             },
         )
     }

@@ -105,8 +105,37 @@ pub struct ModelReport {
     pub sensor_grids: Vec<GridReport>,
     /// Identifiers of the model's views (`render --view-name`).
     pub views: Vec<String>,
-    /// Aperture groups: identifier and the identifiers of their apertures.
-    pub aperture_groups: Vec<(String, Vec<String>)>,
+    /// Aperture groups: identifier, the identifiers of their apertures, and their states'
+    /// modifiers (`"default"`: the aperture's own).
+    pub aperture_groups: Vec<ApertureGroupReport>,
+    /// Rooms of the model, in model order.
+    pub rooms: Vec<String>,
+    /// Bad geometry met on import (each also a warning naming the object).
+    pub bad_geometry: BadGeometryReport,
+}
+
+/// One aperture group in [`ModelReport`].
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct ApertureGroupReport {
+    /// The group's identifier.
+    pub identifier: String,
+    /// Identifiers of its apertures, in model order.
+    pub members: Vec<String>,
+    /// Its states' modifiers, in order.
+    pub states: Vec<String>,
+}
+
+/// Counts of bad geometry in [`ModelReport`].
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct BadGeometryReport {
+    /// Polygons enclosing no area.
+    pub zero_area: usize,
+    /// Polygons further from planar than the model's tolerance.
+    pub non_planar: usize,
+    /// Polygons whose outline crosses itself.
+    pub self_intersecting: usize,
+    /// Apertures and doors not inside their parent face.
+    pub apertures_outside_parent: usize,
 }
 
 /// One sensor grid in [`ModelReport`].
@@ -123,9 +152,11 @@ pub struct GridReport {
 impl ModelReport {
     /// The scene's grids, views and aperture groups; `None` when it has none of them.
     pub fn of(scene: &crate::scene::Scene) -> Option<ModelReport> {
-        if scene.grids.is_empty() && scene.views.is_empty() && scene.aperture_groups.is_empty() {
+        let m = &scene.imported;
+        if scene.grids.is_empty() && *m == Default::default() {
             return None;
         }
+        let c = m.counts;
         Some(ModelReport {
             sensor_grids: scene
                 .grids
@@ -136,8 +167,23 @@ impl ModelReport {
                     sensors: g.sensors.len(),
                 })
                 .collect(),
-            views: scene.views.iter().map(|(n, _)| n.clone()).collect(),
-            aperture_groups: scene.aperture_groups.clone(),
+            views: m.views.iter().map(|v| v.identifier.clone()).collect(),
+            aperture_groups: m
+                .aperture_groups
+                .iter()
+                .map(|g| ApertureGroupReport {
+                    identifier: g.identifier.clone(),
+                    members: g.members.clone(),
+                    states: g.states.clone(),
+                })
+                .collect(),
+            rooms: m.rooms.clone(),
+            bad_geometry: BadGeometryReport {
+                zero_area: c.zero_area,
+                non_planar: c.non_planar,
+                self_intersecting: c.self_intersecting,
+                apertures_outside_parent: c.apertures_outside_parent,
+            },
         })
     }
 }
