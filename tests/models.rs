@@ -206,3 +206,18 @@ fn the_binary_runs_an_hbjson_and_names_the_object_of_a_bad_one() {
     let e = stderr(&o);
     assert!(e.contains("model.hbjson") && e.contains("south"), "{e}");
 }
+
+#[test]
+fn the_honeybee_sample_in_millimetres_is_the_same_scene() {
+    // make_model.py wrote the millimetre copy with honeybee's own unit conversion; every
+    // coordinate is the metre value × 1000 exactly, so the scenes must be identical.
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/honeybee");
+    let m = Scene::load(&root.join("scene.toml")).unwrap();
+    let mm = Scene::load(&root.join("scene_mm.toml")).unwrap();
+    assert_eq!(m.triangles.len(), mm.triangles.len());
+    for (k, (a, b)) in m.triangles.iter().zip(&mm.triangles).enumerate() {
+        assert_eq!(a, b, "triangle {k}");
+    }
+    assert_eq!(m.materials, mm.materials);
+    assert_eq!(m.sensors, mm.sensors);
+}

@@ -65,6 +65,8 @@ def main():
     ap.add_argument("--nproc", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--quick", action="store_true", help="small reference (checks the bench)")
     ap.add_argument("--only", choices=["perez", "overcast"])
+    ap.add_argument("--ways", default="hbjson,mm,rad",
+                    help="which of daystep's readings to run (comma-separated: hbjson, mm, rad)")
     ap.add_argument("--reference-only", action="store_true",
                     help="only compute (and keep) Radiance's references")
     a = ap.parse_args()
@@ -88,8 +90,11 @@ def main():
               (rad / "grid/_model_grids_info.json").read_text())))
     print("Radiance scene: honeybee-radiance's " + ", ".join(RAD_FILES))
     print()
-    ways = [("HBJSON", MODEL / "scene.toml"), ("HBJSON in mm", MODEL / "scene_mm.toml"),
-            ("honeybee's .rad", MODEL / "scene_rad.toml")]
+    ways = [(label, scene) for key, label, scene in
+            [("hbjson", "HBJSON", MODEL / "scene.toml"),
+             ("mm", "HBJSON in mm", MODEL / "scene_mm.toml"),
+             ("rad", "honeybee's .rad", MODEL / "scene_rad.toml")]
+            if key in a.ways.split(",")]
     for key, title, skycmd, dsargs in v.instant_specs(
             float(site["latitude"]), float(site["longitude"]), float(site["utc_offset_h"]),
             rho_g):
@@ -124,8 +129,10 @@ def main():
             c = v.compare(vals, ref, errs, ref_noise)
             print(v.fmt_row(label, secs, c) + f" {within(vals, ref):.1f} % |")
         print()
-        base, errs = got["HBJSON"]
+        base, errs = got.get("HBJSON", (None, None))
         for label in ("HBJSON in mm", "honeybee's .rad"):
+            if base is None or label not in got:
+                continue
             other = got[label][0]
             diff = [abs(o - b) for o, b in zip(other, base)]
             worst = max(diff)

@@ -4,7 +4,7 @@
 # honeybee-written .rad and .pts (honeybee.py). About 10 minutes on 2 cores. DOWNLOADS
 # pyradiance from PyPI the first time (venv.sh). Not part of `cargo test` or CI.
 #
-#     tests/bench/radiance/run-honeybee.sh [--quick] [--only perez|overcast] [--nproc N]
+#     tests/bench/radiance/run-honeybee.sh [--quick] [--only perez|overcast] [--ways hbjson,mm,rad] [--nproc N]
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
