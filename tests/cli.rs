@@ -185,6 +185,8 @@ fn convergence_ladder_writes_csv_plot_and_advice() {
         "draft",
         "--knobs",
         "iteration tolerance",
+        "--repeats",
+        "2",
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -200,8 +202,24 @@ fn convergence_ladder_writes_csv_plot_and_advice() {
     assert_eq!(rms[3], 0.0);
     assert!(rms[0] > rms[2], "{rms:?}");
     assert_eq!(rows.iter().filter(|r| r[7] == "true").count(), 1);
+    // Each rung timed twice: the median lies within its spread; only the finest rung is
+    // the reference, and the plot labels it rather than drawing its zero.
+    for r in &rows {
+        let (t, lo, hi): (f64, f64, f64) = (
+            r[2].parse().unwrap(),
+            r[8].parse().unwrap(),
+            r[9].parse().unwrap(),
+        );
+        assert!(lo <= t && t <= hi, "{r:?}");
+        assert_eq!(r[10], "2");
+    }
+    let refs: Vec<bool> = rows.iter().map(|r| r[11] == "true").collect();
+    assert_eq!(refs, [false, false, false, true]);
     let svg = std::fs::read_to_string(out.join("convergence.svg")).unwrap();
-    assert!(svg.contains("iteration tolerance"));
+    assert!(
+        svg.contains("iteration tolerance") && svg.contains("ref: 1e-4"),
+        "{svg}"
+    );
     assert!(!String::from_utf8_lossy(&o.stdout).trim().is_empty());
     // An unknown knob is a usage error naming the choices.
     let o = daystep(&[

@@ -332,6 +332,10 @@ pub struct ConvergenceArgs {
     /// Relative RMS error the recommendation aims at, percent (above 0, below 100).
     #[arg(long, default_value_t = 2.0, value_parser = real(TARGET_PERCENT))]
     pub target: f64,
+    /// Timed runs per setting (1–20): the cost is their median, and settings whose
+    /// fastest-to-slowest spreads overlap count as equal in cost.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=20))]
+    pub repeats: u32,
     /// Seed of the interreflection.
     #[arg(long)]
     pub seed: Option<u64>,

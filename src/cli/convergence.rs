@@ -77,10 +77,18 @@ pub fn run(a: ConvergenceArgs) -> Result<()> {
     super::check_outputs(&a.out, None)?;
     let show = |done: usize, total: usize, knob: &str, setting: &str| {
         if !knob.is_empty() {
-            note!("  [{:>2}/{total}] {knob}: {setting}", done + 1);
+            note!("  [{:>3}/{total}] {knob}: {setting}", done + 1);
         }
     };
-    let rungs = convergence::run_convergence(&scene, utc, local, &spec, &ladders, &show)?;
+    let rungs = convergence::run_convergence(
+        &scene,
+        utc,
+        local,
+        &spec,
+        &ladders,
+        a.repeats as usize,
+        &show,
+    )?;
     let advice = convergence::write_convergence(&a.out, &a.scene, &what, &base, target, &rungs)?;
     say!("{advice}")?;
     note!("wrote {}", a.out.display());

@@ -1,20 +1,54 @@
 //! Error-against-time plot of a convergence study (`convergence.svg`), with plotters' SVG
-//! backend: one curve per knob, log–log axes, the base preset's rungs ringed.
+//! backend: one curve per knob, time linear and error logarithmic, each point's timing
+//! spread as a bar, the base preset's rungs ringed, each knob's reference (finest)
+//! setting a labelled mark on the bottom line.
 
 use crate::error::{Error, Result};
 use plotters::prelude::*;
 use std::path::Path;
 
-/// One curve: a name and its (seconds, relative error, is base) points, coarse to fine.
+/// One rung of a curve.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Point {
+    /// Median wall time, s.
+    pub seconds: f64,
+    /// Fastest and slowest timed run, s (drawn as a horizontal bar).
+    pub seconds_min: f64,
+    /// See `seconds_min`.
+    pub seconds_max: f64,
+    /// Relative error as a fraction.
+    pub rel_err: f64,
+    /// The base preset's setting (ringed).
+    pub is_base: bool,
+    /// `Some(setting)` for the ladder's reference (finest) rung: its error is 0 by
+    /// construction, so it is drawn as a labelled mark on the axis, not as a measurement.
+    pub reference: Option<String>,
+}
+
+/// One curve: a name and its points, coarse to fine.
 pub struct Curve {
     /// Legend entry.
     pub name: String,
-    /// (wall time s, relative error as a fraction, base setting) per rung.
-    pub points: Vec<(f64, f64, bool)>,
+    /// The rungs, coarse to fine.
+    pub points: Vec<Point>,
 }
 
-/// Relative errors below this are drawn at it (the finest rung of each ladder is 0).
-const FLOOR: f64 = 1e-4;
+/// Okabe & Ito's colour-blind-safe palette without its yellow, which is hard to see on
+/// white; black last, as the base rungs' rings are black too.
+const PALETTE: [RGBColor; 7] = [
+    RGBColor(0xE6, 0x9F, 0x00), // orange
+    RGBColor(0x56, 0xB4, 0xE9), // sky blue
+    RGBColor(0x00, 0x9E, 0x73), // bluish green
+    RGBColor(0x00, 0x72, 0xB2), // blue
+    RGBColor(0xD5, 0x5E, 0x00), // vermillion
+    RGBColor(0xCC, 0x79, 0xA7), // reddish purple
+    RGBColor(0x00, 0x00, 0x00), // black
+];
+
+/// The colour of curve `i` (cycles after the palette's seven).
+pub fn color(i: usize) -> RGBColor {
+    PALETTE[i % PALETTE.len()]
+}
 
 /// Writes the plot to `path` (SVG, 900 × 600), atomically.
 ///
@@ -26,40 +60,60 @@ pub fn error_vs_time_svg(path: &Path, title: &str, curves: &[Curve]) -> Result<(
     crate::files::write_atomic(path, svg.as_bytes())
 }
 
-fn draw(svg: &mut String, title: &str, curves: &[Curve]) -> std::result::Result<(), String> {
-    let pts = curves.iter().flat_map(|c| c.points.iter());
-    let (mut x0, mut x1, mut y1) = (f64::INFINITY, 0.0f64, FLOOR * 10.0);
-    for p in pts {
-        x0 = x0.min(p.0);
-        x1 = x1.max(p.0);
-        y1 = y1.max(p.1);
-    }
-    if !x0.is_finite() || x0 <= 0.0 {
+/// The axes' ranges: time (s) over every run's spread, padded; error over the measured
+/// (non-reference) points, with the bottom a little below the smallest one, where the
+/// references are marked.
+fn ranges(curves: &[Curve]) -> ((f64, f64), (f64, f64)) {
+    let pts = || curves.iter().flat_map(|c| c.points.iter());
+    let mut x0 = pts().map(|p| p.seconds_min).fold(f64::INFINITY, f64::min);
+    let mut x1 = pts().map(|p| p.seconds_max).fold(0.0, f64::max);
+    if !(x0.is_finite() && x0 > 0.0) {
         x0 = 0.01;
     }
-    let x1 = x1.max(x0 * 10.0);
+    x1 = x1.max(x0 * 1.1);
+    let measured = || pts().filter(|p| p.reference.is_none()).map(|p| p.rel_err);
+    let mut y0 = measured()
+        .filter(|e| *e > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    let mut y1 = measured().fold(0.0, f64::max);
+    if !y0.is_finite() {
+        y0 = 1e-3;
+    }
+    y1 = y1.max(y0 * 10.0);
+    y0 /= 4.0; // room for the reference marks below the smallest measured error
+    ((x0, x1), (y0, y1 * 1.6))
+}
+
+fn draw(svg: &mut String, title: &str, curves: &[Curve]) -> std::result::Result<(), String> {
+    let ((x0, x1), (y0, y1)) = ranges(curves);
     let root = SVGBackend::with_string(svg, (900, 600)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
+    // Linear time axis padded by 5 % of the span: its labels then cover the data, which a
+    // log axis over less than a decade does not.
+    let pad = 0.05 * (x1 - x0);
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 20))
         .margin(12)
         .x_label_area_size(45)
         .y_label_area_size(70)
-        .build_cartesian_2d(
-            (x0 * 0.7..x1 * 1.4).log_scale(),
-            (FLOOR * 0.7..y1 * 1.5).log_scale(),
-        )
+        .build_cartesian_2d((x0 - pad).max(0.0)..x1 + pad, (y0..y1).log_scale())
         .map_err(|e| e.to_string())?;
     chart
         .configure_mesh()
-        .x_desc("wall time of one cold instant, s")
-        .y_desc("RMS relative error vs finest setting")
+        .x_desc("wall time of one cold instant, s (median of the repeats; bar: fastest to slowest)")
+        .y_desc("RMS relative error vs the knob's finest setting")
+        .x_labels(10)
         .y_label_formatter(&|v| format!("{:.2} %", 100.0 * v))
         .draw()
         .map_err(|e| e.to_string())?;
+    let floor = y0 * 1.3;
     for (i, c) in curves.iter().enumerate() {
-        let color = Palette99::pick(i).to_rgba();
-        let line: Vec<(f64, f64)> = c.points.iter().map(|p| (p.0, p.1.max(FLOOR))).collect();
+        let color = color(i);
+        let measured: Vec<&Point> = c.points.iter().filter(|p| p.reference.is_none()).collect();
+        let line: Vec<(f64, f64)> = measured
+            .iter()
+            .map(|p| (p.seconds, p.rel_err.max(floor)))
+            .collect();
         chart
             .draw_series(LineSeries::new(line.clone(), color.stroke_width(2)))
             .map_err(|e| e.to_string())?
@@ -70,14 +124,42 @@ fn draw(svg: &mut String, title: &str, curves: &[Curve]) -> std::result::Result<
         chart
             .draw_series(line.iter().map(|p| Circle::new(*p, 3, color.filled())))
             .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(measured.iter().map(|p| {
+                let y = p.rel_err.max(floor);
+                PathElement::new(
+                    vec![(p.seconds_min, y), (p.seconds_max, y)],
+                    color.stroke_width(1),
+                )
+            }))
+            .map_err(|e| e.to_string())?;
         let base = c
             .points
             .iter()
-            .filter(|p| p.2)
-            .map(|p| (p.0, p.1.max(FLOOR)));
+            .filter(|p| p.is_base && p.reference.is_none())
+            .map(|p| (p.seconds, p.rel_err.max(floor)));
         chart
             .draw_series(base.map(|p| Circle::new(p, 7, BLACK.stroke_width(1))))
             .map_err(|e| e.to_string())?;
+        // The reference: a hollow triangle on the bottom line, labelled with its setting.
+        for p in c.points.iter().filter(|p| p.reference.is_some()) {
+            let at = (p.seconds, y0 * 1.15);
+            chart
+                .draw_series(std::iter::once(TriangleMarker::new(
+                    at,
+                    6,
+                    color.stroke_width(2),
+                )))
+                .map_err(|e| e.to_string())?;
+            let label = format!("ref: {}", p.reference.as_deref().unwrap_or_default());
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    label,
+                    (p.seconds, y0 * 1.45),
+                    ("sans-serif", 11).into_font().color(&color),
+                )))
+                .map_err(|e| e.to_string())?;
+        }
     }
     chart
         .configure_series_labels()
@@ -98,14 +180,26 @@ mod tests {
     fn writes_an_svg_with_one_legend_entry_per_curve() {
         let d = tempfile::tempdir().unwrap();
         let p = d.path().join("c.svg");
+        let pt = |t: f64, e: f64, base: bool, reference: Option<&str>| Point {
+            seconds: t,
+            seconds_min: t * 0.9,
+            seconds_max: t * 1.1,
+            rel_err: e,
+            is_base: base,
+            reference: reference.map(str::to_string),
+        };
         let curves = [
             Curve {
                 name: "sky subdivision".into(),
-                points: vec![(0.5, 0.03, false), (1.0, 0.01, true), (4.0, 0.0, false)],
+                points: vec![
+                    pt(4.5, 0.03, false, None),
+                    pt(5.0, 0.01, true, None),
+                    pt(9.0, 0.0, false, Some("reference sky")),
+                ],
             },
             Curve {
                 name: "interreflection lines".into(),
-                points: vec![(0.3, 0.1, false), (2.0, 0.0, false)],
+                points: vec![pt(4.2, 0.1, false, None), pt(6.0, 0.0, false, Some("8192"))],
             },
         ];
         error_vs_time_svg(&p, "office", &curves).unwrap();
@@ -113,5 +207,33 @@ mod tests {
         assert!(s.starts_with("<svg"), "{}", &s[..50.min(s.len())]);
         assert!(s.contains("sky subdivision") && s.contains("interreflection lines"));
         assert!(s.contains("office"));
+        // The references are labelled, not drawn as measured zeros.
+        assert!(s.contains("ref: reference sky") && s.contains("ref: 8192"));
+        // Okabe–Ito without its yellow.
+        assert!(s.contains("#E69F00") && !s.to_uppercase().contains("#F0E442"));
+    }
+
+    #[test]
+    fn axes_cover_every_run() {
+        let pt = |t: f64, e: f64, r: Option<&str>| Point {
+            seconds: t,
+            seconds_min: t - 0.2,
+            seconds_max: t + 0.3,
+            rel_err: e,
+            is_base: false,
+            reference: r.map(str::to_string),
+        };
+        let curves = [Curve {
+            name: "k".into(),
+            points: vec![
+                pt(4.0, 0.05, None),
+                pt(6.0, 0.002, None),
+                pt(9.5, 0.0, Some("f")),
+            ],
+        }];
+        let ((x0, x1), (y0, y1)) = ranges(&curves);
+        assert!(x0 <= 3.8 && x1 >= 9.8 && x0 > 3.0 && x1 < 11.0, "{x0} {x1}");
+        // The reference's zero does not set the error axis; it sits below the smallest.
+        assert!(y0 < 0.002 && y0 > 1e-4 && y1 >= 0.05, "{y0} {y1}");
     }
 }

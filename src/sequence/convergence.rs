@@ -9,6 +9,12 @@
 //! next to them the median stated relative error (`lux_err / lux`) and the fraction of those
 //! sensors whose difference the two runs' stated errors cover. A ladder's finest rung is not
 //! converged either, so a rung's error is the part its knob contributes, not its total.
+//!
+//! Cost, per rung: the median wall time of several cold runs, with its spread (min–max).
+//! The repeats are interleaved (every rung once, then again), so a drift in the machine's
+//! load falls on every rung alike. Two rungs whose spreads overlap cost the same as far as
+//! the measurement can tell, and the recommendation then takes the more accurate one: a
+//! timing difference within the noise never decides it.
 
 use super::config::{Quality, SkySpec};
 use super::instant::run_instant;
@@ -27,8 +33,14 @@ pub struct Rung {
     pub knob: String,
     /// The knob's setting, as written in `convergence.csv`.
     pub setting: String,
-    /// Wall time of the cold instant, s.
+    /// Median wall time of the cold instant over the repeats, s.
     pub seconds: f64,
+    /// Fastest of the repeats, s.
+    pub seconds_min: f64,
+    /// Slowest of the repeats, s.
+    pub seconds_max: f64,
+    /// Number of timed runs.
+    pub repeats: usize,
     /// RMS relative difference to the ladder's finest rung (0 for that rung).
     pub rms_rel_err: f64,
     /// Largest relative difference to the finest rung.
@@ -39,6 +51,17 @@ pub struct Rung {
     pub covered: f64,
     /// Whether this rung has the base preset's setting of its knob.
     pub is_base: bool,
+    /// Whether this rung is its ladder's finest, the reference the others are measured
+    /// against (its error is 0 by construction, not measured).
+    pub is_reference: bool,
+}
+
+impl Rung {
+    /// True when the two rungs' timing spreads overlap: their costs are not told apart by
+    /// the measurement.
+    pub fn same_cost(&self, other: &Rung) -> bool {
+        self.seconds_min <= other.seconds_max && other.seconds_min <= self.seconds_max
+    }
 }
 
 /// A knob's ladder: settings from coarse to fine, each a whole [`Quality`].
@@ -207,53 +230,117 @@ fn compare(x: &[(f64, f64)], r: &[(f64, f64)]) -> (f64, f64, f64, f64) {
     )
 }
 
-/// Runs every rung of `ladders` on one instant and measures each against its ladder's
-/// finest rung. `progress(done, total, knob, setting)` is called before each rung.
+/// Runs every rung of `ladders` on one instant `repeats` times (at least once),
+/// interleaved, and measures each against its ladder's finest rung.
+/// `progress(done, total, knob, setting)` is called before each run.
 ///
 /// # Errors
-/// Bad time or sky parameters (as [`run_instant`]).
+/// Bad time or sky parameters (as [`run_instant`]); [`Error::Internal`] when a repeat
+/// gives other sensor values than the first run (the engine is deterministic).
 pub fn run_convergence(
     scene: &Scene,
     utc: DateTime<Utc>,
     local: NaiveDateTime,
     spec: &SkySpec,
     ladders: &[Ladder],
+    repeats: usize,
     progress: &dyn Fn(usize, usize, &str, &str),
 ) -> Result<Vec<Rung>> {
-    let total: usize = ladders.iter().map(|l| l.rungs.len()).sum();
+    let repeats = repeats.max(1);
+    let rungs: Vec<(&Ladder, &(String, Quality, bool))> = ladders
+        .iter()
+        .flat_map(|l| l.rungs.iter().map(move |r| (l, r)))
+        .collect();
+    let total = rungs.len() * repeats;
+    let mut values: Vec<Option<Vec<(f64, f64)>>> = vec![None; rungs.len()];
+    let mut times: Vec<Vec<f64>> = vec![Vec::new(); rungs.len()];
     let mut done = 0;
-    let mut out = Vec::new();
-    for l in ladders {
-        let mut runs = Vec::new();
-        for (setting, q, _) in &l.rungs {
+    for _ in 0..repeats {
+        for (k, (l, (setting, q, _))) in rungs.iter().enumerate() {
             progress(done, total, l.knob, setting);
             let t0 = Instant::now();
             let r = run_instant(scene, utc, local, spec, q)?;
-            let secs = t0.elapsed().as_secs_f64();
+            times[k].push(t0.elapsed().as_secs_f64());
             let v: Vec<(f64, f64)> = r.sensors.iter().map(|s| (s.lux, s.lux_err)).collect();
-            runs.push((secs, v));
+            match &values[k] {
+                Some(first) if *first != v => {
+                    return Err(Error::Internal(format!(
+                        "convergence: {} {setting} gave other values when repeated",
+                        l.knob
+                    )))
+                }
+                Some(_) => {}
+                None => values[k] = Some(v),
+            }
             done += 1;
         }
-        let finest = runs.last().map(|r| r.1.clone()).unwrap_or_default();
-        for ((setting, _, is_base), (secs, v)) in l.rungs.iter().zip(&runs) {
+    }
+    progress(done, total, "", "");
+    let mut out = Vec::new();
+    let mut k = 0;
+    for l in ladders {
+        let n = l.rungs.len();
+        let finest = values[k + n - 1].clone().unwrap_or_default();
+        for (j, (setting, _, is_base)) in l.rungs.iter().enumerate() {
+            let v = values[k + j].as_deref().unwrap_or_default();
             let (rms, max, stated, covered) = compare(v, &finest);
+            let mut t = times[k + j].clone();
+            t.sort_by(f64::total_cmp);
             out.push(Rung {
                 knob: l.knob.into(),
                 setting: setting.clone(),
-                seconds: *secs,
+                seconds: median(&t),
+                seconds_min: t[0],
+                seconds_max: t[t.len() - 1],
+                repeats: t.len(),
                 rms_rel_err: rms,
                 max_rel_err: max,
                 stated_rel_err: stated,
                 covered,
                 is_base: *is_base,
+                is_reference: j + 1 == n,
             });
         }
+        k += n;
     }
-    progress(done, total, "", "");
     Ok(out)
 }
 
-/// The plot's curves: one per knob, (seconds, RMS relative error, base) per rung.
+/// Median of sorted, non-empty `t`.
+fn median(t: &[f64]) -> f64 {
+    let n = t.len();
+    if n % 2 == 1 {
+        t[n / 2]
+    } else {
+        0.5 * (t[n / 2 - 1] + t[n / 2])
+    }
+}
+
+/// The setting a ladder recommends within `target`: among the rungs within it, the
+/// cheapest by median time; then, among the rungs within target whose cost cannot be told
+/// apart from that one's ([`Rung::same_cost`]), the most accurate (the finer on a tie).
+fn pick<'a>(ladder: &[&'a Rung], target: f64) -> Option<&'a Rung> {
+    let within: Vec<&Rung> = ladder
+        .iter()
+        .copied()
+        .filter(|r| r.rms_rel_err <= target)
+        .collect();
+    let cheapest = within
+        .iter()
+        .copied()
+        .min_by(|a, b| a.seconds.total_cmp(&b.seconds))?;
+    within
+        .iter()
+        .copied()
+        .filter(|r| r.same_cost(cheapest))
+        .min_by(|a, b| {
+            a.rms_rel_err
+                .total_cmp(&b.rms_rel_err)
+                .then(std::cmp::Ordering::Greater)
+        })
+}
+
+/// The plot's curves: one per knob, a point per rung.
 pub fn curves(rungs: &[Rung]) -> Vec<Curve> {
     let mut out: Vec<Curve> = Vec::new();
     for r in rungs {
@@ -264,19 +351,30 @@ pub fn curves(rungs: &[Rung]) -> Vec<Curve> {
             });
         }
         if let Some(c) = out.last_mut() {
-            c.points.push((r.seconds, r.rms_rel_err, r.is_base));
+            c.points.push(crate::export::plot::Point {
+                seconds: r.seconds,
+                seconds_min: r.seconds_min,
+                seconds_max: r.seconds_max,
+                rel_err: r.rms_rel_err,
+                is_base: r.is_base,
+                reference: r.is_reference.then(|| r.setting.clone()),
+            });
         }
     }
     out
 }
 
-/// `convergence.csv`: `knob,setting,seconds,rms_rel_err,max_rel_err,stated_rel_err,covered,base`.
+/// `convergence.csv`: `knob,setting,seconds,rms_rel_err,max_rel_err,stated_rel_err,covered,base,
+/// seconds_min,seconds_max,repeats,reference` (`seconds` is the median; `reference` marks
+/// each ladder's finest rung, whose error is 0 by construction).
 pub fn csv(rungs: &[Rung]) -> String {
-    let mut s =
-        String::from("knob,setting,seconds,rms_rel_err,max_rel_err,stated_rel_err,covered,base\n");
+    let mut s = String::from(
+        "knob,setting,seconds,rms_rel_err,max_rel_err,stated_rel_err,covered,base,\
+         seconds_min,seconds_max,repeats,reference\n",
+    );
     for r in rungs {
         s.push_str(&format!(
-            "{},{},{:.4},{:.6},{:.6},{:.6},{:.4},{}\n",
+            "{},{},{:.4},{:.6},{:.6},{:.6},{:.4},{},{:.4},{:.4},{},{}\n",
             r.knob,
             r.setting.replace(',', ";"),
             r.seconds,
@@ -284,7 +382,11 @@ pub fn csv(rungs: &[Rung]) -> String {
             r.max_rel_err,
             r.stated_rel_err,
             r.covered,
-            r.is_base
+            r.is_base,
+            r.seconds_min,
+            r.seconds_max,
+            r.repeats,
+            r.is_reference
         ));
     }
     s
@@ -308,12 +410,11 @@ pub fn recommendation(rungs: &[Rung], target: f64) -> String {
                 worst = Some(b);
             }
         }
-        let cheapest = ladder
-            .iter()
-            .filter(|r| r.rms_rel_err <= target)
-            .min_by(|a, b| a.seconds.total_cmp(&b.seconds));
-        if let Some(c) = cheapest {
-            lines.push(format!("{k}: {} ({:.1} s)", c.setting, c.seconds));
+        if let Some(c) = pick(&ladder, target) {
+            lines.push(format!(
+                "{k}: {} ({:.1} s, {:.1}–{:.1})",
+                c.setting, c.seconds, c.seconds_min, c.seconds_max
+            ));
         }
     }
     let mut s = String::new();
@@ -327,17 +428,13 @@ pub fn recommendation(rungs: &[Rung], target: f64) -> String {
     }
     if !lines.is_empty() {
         s.push_str(&format!(
-            "Cheapest setting within {:.1} % per knob: {}. ",
+            "Cheapest setting within {:.1} % per knob (median time of the repeats, spread; costs whose spreads overlap count as equal, and the more accurate is named): {}. ",
             100.0 * target,
             lines.join("; ")
         ));
     }
     let presets: Vec<&Rung> = rungs.iter().filter(|r| r.knob == "presets").collect();
-    if let Some(p) = presets
-        .iter()
-        .filter(|r| r.rms_rel_err <= target)
-        .min_by(|a, b| a.seconds.total_cmp(&b.seconds))
-    {
+    if let Some(p) = pick(&presets, target) {
         s.push_str(&format!(
             "Of the presets, `{}` is the cheapest within {:.1} % of `reference` ({:.1} % RMS, {:.1} s; stated error {:.1} %, covering {:.0} % of sensors).",
             p.setting,
@@ -423,18 +520,51 @@ mod tests {
         }
     }
 
-    #[test]
-    fn recommendation_names_the_dominant_knob_and_the_cheapest_preset() {
-        let r = |knob: &str, setting: &str, s: f64, e: f64, base: bool| Rung {
+    /// A rung timed at `s` ± 5 %.
+    fn rung(knob: &str, setting: &str, s: f64, e: f64, base: bool) -> Rung {
+        Rung {
             knob: knob.into(),
             setting: setting.into(),
             seconds: s,
+            seconds_min: 0.95 * s,
+            seconds_max: 1.05 * s,
+            repeats: 3,
             rms_rel_err: e,
             max_rel_err: e,
             stated_rel_err: e,
             covered: 1.0,
             is_base: base,
-        };
+            is_reference: e == 0.0,
+        }
+    }
+
+    #[test]
+    fn costs_within_the_timing_spread_are_equal_and_the_more_accurate_wins() {
+        // The issue's case: 1e-4 measured faster than 1e-1 by noise alone.
+        let mut fine = rung("iteration tolerance", "1e-4", 5.52, 0.0, false);
+        let mut coarse = rung("iteration tolerance", "1e-1", 5.79, 0.012, false);
+        (fine.seconds_min, fine.seconds_max) = (5.3, 6.1);
+        (coarse.seconds_min, coarse.seconds_max) = (5.4, 6.0);
+        let mid = rung("iteration tolerance", "1e-2", 5.6, 0.004, true);
+        let ladder = [&coarse, &mid, &fine];
+        assert!(coarse.same_cost(&fine));
+        assert_eq!(pick(&ladder, 0.02).unwrap().setting, "1e-4");
+        // Clearly cheaper (spreads apart) and within target: the cheap one.
+        let cheap = rung("sun snapping", "2 deg", 2.0, 0.015, false);
+        let dear = rung("sun snapping", "0.05 deg", 9.0, 0.0, false);
+        assert_eq!(pick(&[&cheap, &dear], 0.02).unwrap().setting, "2 deg");
+        // Outside target: never picked, however cheap.
+        assert_eq!(pick(&[&cheap, &dear], 0.01).unwrap().setting, "0.05 deg");
+        // The order of the timings does not change the answer: the same pick whichever of
+        // the equal-cost rungs happened to time fastest.
+        (fine.seconds, coarse.seconds) = (5.9, 5.5);
+        assert_eq!(pick(&[&coarse, &mid, &fine], 0.02).unwrap().setting, "1e-4");
+    }
+
+    #[test]
+    fn recommendation_names_the_dominant_knob_and_the_cheapest_preset() {
+        let r =
+            |knob: &str, setting: &str, s: f64, e: f64, base: bool| rung(knob, setting, s, e, base);
         let rungs = [
             r("sky subdivision", "default sky", 1.0, 0.004, true),
             r("interreflection lines", "256 directions", 0.5, 0.05, false),

@@ -49,7 +49,7 @@ fn main() {
             eprintln!("  [{:>2}/{total}] {knob}: {setting}", done + 1);
         }
     };
-    let rungs = run_convergence(&scene, utc, local, &spec, &ls, &show).unwrap();
+    let rungs = run_convergence(&scene, utc, local, &spec, &ls, 3, &show).unwrap();
     print!("{}", csv(&rungs));
     println!("{}", recommendation(&rungs, 0.02));
     let curves = curves(&rungs);
