@@ -83,11 +83,23 @@ def run_honeybee(root: Path):
 
     from importlib.metadata import version as _version
     version = _version("honeybee-radiance-postprocess")
-    for name, _, _ in CASES:
-        folder = root / name / "results"
+    import honeybee_radiance_postprocess.leed.leed_schedule as leed_schedule
+
+    class StableArgsort:
+        """numpy with a stable argsort, for the worst-offender ranking: numpy's default
+        argsort is not stable (SIMD sorts on AVX-512), so ties between groups rank in an
+        order no other program can reproduce; daystep ranks ties in path order."""
+
+        def __getattr__(self, k):
+            return getattr(np, k)
+
+        def argsort(self, a, axis=-1, **_):
+            return np.argsort(a, axis=axis, kind="stable")
+
+    def leed(folder):
         (summary, summary_grid, da_grids, hours_above, states_schedule, fail_to_comply,
          grids_info) = leed_option_one(str(folder), shade_transmittance=0.05)
-        out = {"leed": {
+        return {
             "sda": summary["sda"], "ase": summary["ase"], "credits": summary["credits"],
             "grids": [{"name": g["name"],
                        "sda": summary_grid[g["full_id"]]["sda"],
@@ -101,7 +113,14 @@ def run_honeybee(root: Path):
             # 8760 values per group: 0 open, 1 shaded; keep the sun-up hours
             "schedule": {k: [int(v["values"][h]) for h in SUN_UP]
                          for k, v in states_schedule.items()},
-        }}
+        }
+
+    for name, _, _ in CASES:
+        folder = root / name / "results"
+        out = {"leed": leed(folder)}
+        leed_schedule.np = StableArgsort()
+        out["leed_stable_argsort"] = leed(folder)
+        leed_schedule.np = np
         sched = [int(x) for x in (root / name / "daylight_hours.csv").read_text().split()]
         results = AnnualDaylight(str(folder), schedule=sched)
         en = []
@@ -123,8 +142,42 @@ def run_honeybee(root: Path):
         print(f"{name}: honeybee done", file=sys.stderr)
 
 
+def compare_leed(name, hl, ds, check, diffs):
+    """Compares one honeybee LEED block with daystep's; returns (group-hours, sensors)."""
+    dl = ds["leed"]
+    # honeybee rounds its summaries to 2 decimals; daystep keeps them whole
+    check(name, "sDA", hl["sda"], round(dl["sda_pct"], 2))
+    check(name, "ASE", hl["ase"], round(dl["ase_pct"], 2))
+    credits = hl["credits"]
+    want = (3, True) if credits == "Exemplary performance" else (credits, False)
+    check(name, "points", want, (dl["points"], dl["exemplary_performance"]))
+    sensors = hours = 0
+    for hg, dg in zip(hl["grids"], dl["grids"]):
+        g = f"{name}/{hg['name']}"
+        for k, dk in (("sda", "sda_pct"), ("sda_blinds_up", "sda_blinds_open_pct"),
+                      ("sda_blinds_down", "sda_blinds_shaded_pct"), ("ase", "ase_pct")):
+            check(g, k, hg[k], round(dg[dk], 2))
+        for i, (a, b) in enumerate(zip(hg["da"], dg["da"])):
+            check(g, f"DA sensor {i}", a, b, 1e-9)
+        for i, (a, b) in enumerate(zip(hg["hours_above"], dg["ase_hours"])):
+            check(g, f"ASE hours sensor {i}", a, b)
+        check(g, "hours that cannot comply", hg["fail_hoys"], dg["fail_hoys"])
+        sensors += len(hg["da"])
+    for grp, vals in hl["schedule"].items():
+        dv = ds["schedule"].get(grp)
+        if dv is None:
+            diffs.append(f"{name}: group {grp} missing from daystep's schedule")
+            continue
+        bad = [i for i, (a, b) in enumerate(zip(vals, dv)) if a != b]
+        hours += len(vals)
+        if bad:
+            diffs.append(f"{name}: schedule of {grp} differs at {len(bad)} sun-up hours "
+                         f"(first {SUN_UP[bad[0]]})")
+    return hours, sensors
+
+
 def compare(root: Path):
-    rows, diffs = [], []
+    rows, diffs, all_stable = [], [], []
 
     def check(case, what, a, b, tol=0.0):
         same = a == b if tol == 0 else abs(a - b) <= tol
@@ -135,53 +188,45 @@ def compare(root: Path):
     for name, _, _ in CASES:
         hb = json.loads((root / name / "honeybee.json").read_text())
         ds = json.loads((root / name / "daystep.json").read_text())
-        hl, dl = hb["leed"], ds["leed"]
         n0 = len(diffs)
-        # honeybee rounds its summaries to 2 decimals; daystep keeps them whole
-        check(name, "sDA", hl["sda"], round(dl["sda_pct"], 2))
-        check(name, "ASE", hl["ase"], round(dl["ase_pct"], 2))
-        credits = hl["credits"]
-        want = (3, True) if credits == "Exemplary performance" else (credits, False)
-        check(name, "points", want, (dl["points"], dl["exemplary_performance"]))
-        sensors = hours = 0
-        for hg, dg in zip(hl["grids"], dl["grids"]):
-            g = f"{name}/{hg['name']}"
-            for k, dk in (("sda", "sda_pct"), ("sda_blinds_up", "sda_blinds_open_pct"),
-                          ("sda_blinds_down", "sda_blinds_shaded_pct"), ("ase", "ase_pct")):
-                check(g, k, hg[k], round(dg[dk], 2))
-            for i, (a, b) in enumerate(zip(hg["da"], dg["da"])):
-                check(g, f"DA sensor {i}", a, b, 1e-9)
-            for i, (a, b) in enumerate(zip(hg["hours_above"], dg["ase_hours"])):
-                check(g, f"ASE hours sensor {i}", a, b)
-            check(g, "hours that cannot comply", hg["fail_hoys"], dg["fail_hoys"])
-            sensors += len(hg["da"])
-        for grp, vals in hl["schedule"].items():
-            dv = ds["schedule"].get(grp)
-            if dv is None:
-                diffs.append(f"{name}: group {grp} missing from daystep's schedule")
-                continue
-            bad = [i for i, (a, b) in enumerate(zip(vals, dv)) if a != b]
-            hours += len(vals)
-            if bad:
-                diffs.append(f"{name}: schedule of {grp} differs at {len(bad)} sun-up hours "
-                             f"(first {SUN_UP[bad[0]]})")
+        hours, sensors = compare_leed(name, hb["leed"], ds, check, diffs)
+        leed_ok = len(diffs) == n0
+        stable_diffs = []
+
+        def check_stable(case, what, a, b, tol=0.0):
+            same = a == b if tol == 0 else abs(a - b) <= tol
+            if not same:
+                stable_diffs.append(f"{case}: {what}: honeybee {a!r} daystep {b!r}")
+            return same
+
+        compare_leed(name, hb["leed_stable_argsort"], ds, check_stable, stable_diffs)
+        all_stable.extend(stable_diffs)
+        n1 = len(diffs)
         for hg, dg in zip(hb["en17037"]["grids"], ds["en17037"]["grids"]):
             for level in ("minimum", "medium", "high"):
                 for k in ("target_area_pct", "target_pass", "minimum_area_pct", "minimum_pass"):
                     check(f"{name}/{hg['name']}", f"EN 17037 {level}.{k}",
                           hg[level][k], dg[level][k], 1e-9 if k.endswith("pct") else 0)
+        hl = hb["leed"]
         rows.append((name, len(hl["grids"]), sensors, hours, hl["sda"], hl["ase"],
-                     credits, len(diffs) == n0))
+                     hl["credits"], leed_ok, len(diffs) == n1, not stable_diffs))
     print(f"honeybee-radiance-postprocess {hb.get('version')}")
-    print("| case | grids | sensors | group-hours | sDA % | ASE % | points | agree |")
-    print("|---|---|---|---|---|---|---|---|")
+    yes = lambda b: "yes" if b else "NO"  # noqa: E731
+    print("| case | grids | sensors | group-hours | sDA % | ASE % | points | LEED agrees "
+          "| EN 17037 agrees | LEED, stable argsort |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
-        print("| " + " | ".join(str(x) for x in r[:-1]) + f" | {'yes' if r[-1] else 'NO'} |")
+        print("| " + " | ".join(str(x) for x in r[:-3]) + " | "
+              + " | ".join(yes(b) for b in r[-3:]) + " |")
     if diffs:
-        print(f"\n{len(diffs)} differences:")
+        print(f"\n{len(diffs)} differences (honeybee as installed):")
         for d in diffs:
             print("-", d)
-    return 0 if not diffs else 1
+    if all_stable:
+        print(f"\n{len(all_stable)} differences (honeybee with a stable argsort):")
+        for d in all_stable:
+            print("-", d)
+    return 0 if not all_stable else 1
 
 
 if __name__ == "__main__":
