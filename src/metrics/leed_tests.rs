@@ -291,7 +291,8 @@ fn points_table() {
     assert_eq!(points(74.994, &[80.0], false), (3, false)); // 74.99 → 2, +1
     assert_eq!(points(74.996, &[50.0], false), (3, false)); // 75.00 → 3
     assert_eq!(points(74.994, &[50.0], false), (2, false));
-    assert_eq!(points(54.996, &[54.996], false), (3, false)); // 55.00 → 2, +1
+    // 54.996 → 55.00 → 2, +1.
+    assert_eq!(points(54.996, &[54.996], false), (3, false));
     // 54.995 is 54.99499… in binary: Python and Rust both round it to 54.99 → 1 point.
     assert_eq!(points(54.995, &[54.995], false), (1, false));
     assert_eq!(points(54.994, &[60.0, 40.0], false), (1, false));

@@ -25,7 +25,10 @@ fn read_npy(path: &Path) -> (usize, usize, Vec<f32>) {
         )
     };
     let header = std::str::from_utf8(&bytes[start..start + header_len]).unwrap();
-    assert!(header.contains("'<f4'") && header.contains("'fortran_order': False"), "{header}");
+    assert!(
+        header.contains("'<f4'") && header.contains("'fortran_order': False"),
+        "{header}"
+    );
     let shape = &header[header.find("'shape': (").unwrap() + 10..];
     let shape: Vec<usize> = shape[..shape.find(')').unwrap()]
         .split(',')
@@ -98,8 +101,12 @@ fn run_case(case: &Path) {
                     format!("0_{name}")
                 };
                 let load = |res_type: &str| {
-                    let (r, c, v) =
-                        read_npy(&res.join(name).join(&state).join(res_type).join(format!("{id}.npy")));
+                    let (r, c, v) = read_npy(
+                        &res.join(name)
+                            .join(&state)
+                            .join(res_type)
+                            .join(format!("{id}.npy")),
+                    );
                     assert_eq!(c, sun_up.len());
                     to_hour_major(r, c, &v)
                 };
@@ -174,7 +181,12 @@ fn run_case(case: &Path) {
     let en = en17037(&en_grids, &daylight, daylight_steps).unwrap();
 
     let mut v = serde_json::to_value(&leed).unwrap();
-    for (gv, g) in v["grids"].as_array_mut().unwrap().iter_mut().zip(&leed.grids) {
+    for (gv, g) in v["grids"]
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .zip(&leed.grids)
+    {
         gv["da"] = json!(g.da);
         gv["ase_hours"] = json!(g.ase_hours);
         gv["fail_hoys"] = json!(g.fail_steps.iter().map(|s| sun_up[*s]).collect::<Vec<_>>());
@@ -184,7 +196,12 @@ fn run_case(case: &Path) {
         .groups
         .iter()
         .zip(&leed.blinds.shaded)
-        .map(|(g, s)| (g.clone(), json!(s.iter().map(|b| u8::from(*b)).collect::<Vec<_>>())))
+        .map(|(g, s)| {
+            (
+                g.clone(),
+                json!(s.iter().map(|b| u8::from(*b)).collect::<Vec<_>>()),
+            )
+        })
         .collect();
     let out = json!({"leed": v, "schedule": schedule, "en17037": en});
     std::fs::write(case.join("daystep.json"), out.to_string()).unwrap();
