@@ -136,6 +136,28 @@ pub struct BlindSchedule {
     pub shaded: Vec<Vec<bool>>,
 }
 
+impl BlindSchedule {
+    /// `leed_blinds.csv`: a header `time,<group>,…` and one row per occupied sun-up step,
+    /// 0 open and 1 shaded. `times` labels the sun-up steps (one per step, as the caller
+    /// prints times), `occupied` is the period's mask.
+    pub fn csv(&self, times: &[impl std::fmt::Display], occupied: &[bool]) -> String {
+        let mut out = String::from("time");
+        for g in &self.groups {
+            out.push(',');
+            out.push_str(g);
+        }
+        out.push('\n');
+        for (step, t) in times.iter().enumerate().filter(|(s, _)| occupied[*s]) {
+            out.push_str(&t.to_string());
+            for s in &self.shaded {
+                out.push_str(if s[step] { ",1" } else { ",0" });
+            }
+            out.push('\n');
+        }
+        out
+    }
+}
+
 /// LEED v4.1 Daylight Option 1 results (`leed.json`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LeedResult {
