@@ -415,12 +415,12 @@ fn invariants_on_random_rooms() {
         for step in (0..steps).filter(|s| occ[*s] && !gr.fail_steps.contains(s)) {
             let mut over = 0;
             for s in 0..n {
-                let mut direct = 0.0f64;
-                for k in 0..groups {
-                    if !r.blinds.shaded[k][step] {
-                        direct += f64::from(data[k].0[step * n + s]);
-                    }
-                }
+                let direct: f64 = data
+                    .iter()
+                    .zip(&r.blinds.shaded)
+                    .filter(|(_, shaded)| !shaded[step])
+                    .map(|(d, _)| f64::from(d.0[step * n + s]))
+                    .sum();
                 over += usize::from(direct >= 1000.0);
             }
             assert!(
