@@ -83,6 +83,20 @@ fn run_case(case: &Path) {
     let daylight: Vec<bool> = sun_up.iter().map(|h| daylight_year[*h]).collect();
     let daylight_steps = daylight_year.iter().filter(|d| **d).count();
 
+    // Sensor areas, when the case has a model (peer.py writes them from its grid meshes).
+    let areas: Option<Value> = std::fs::read_to_string(case.join("areas.json"))
+        .ok()
+        .map(|t| serde_json::from_str(&t).unwrap());
+    let area_of = |id: &str| -> Option<Vec<f64>> {
+        areas.as_ref().map(|a| {
+            a[id]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect()
+        })
+    };
     let mut grids_data = Vec::new();
     for g in info.as_array().unwrap() {
         let id = g["full_id"].as_str().unwrap().to_string();
@@ -122,14 +136,15 @@ fn run_case(case: &Path) {
             g["name"].as_str().unwrap().to_string(),
             g["count"].as_u64().unwrap() as usize,
             paths,
+            area_of(&id),
         ));
     }
     let grids: Vec<LeedGrid> = grids_data
         .iter()
-        .map(|(name, sensors, paths)| LeedGrid {
+        .map(|(name, sensors, paths, areas)| LeedGrid {
             name,
             sensors: *sensors,
-            areas: None,
+            areas: areas.as_deref(),
             paths: paths
                 .iter()
                 .map(|p| LightPath {
@@ -158,7 +173,7 @@ fn run_case(case: &Path) {
     // np.sum over the stacked float32 arrays).
     let totals: Vec<Vec<f32>> = grids_data
         .iter()
-        .map(|(_, _, paths)| {
+        .map(|(_, _, paths, _)| {
             let mut t = paths[0].total.clone();
             for p in &paths[1..] {
                 for (a, b) in t.iter_mut().zip(&p.total) {
@@ -171,10 +186,10 @@ fn run_case(case: &Path) {
     let en_grids: Vec<En17037Grid> = grids_data
         .iter()
         .zip(&totals)
-        .map(|((name, sensors, _), t)| En17037Grid {
+        .map(|((name, sensors, _, areas), t)| En17037Grid {
             name,
             sensors: *sensors,
-            areas: None,
+            areas: areas.as_deref(),
             total: t,
         })
         .collect();

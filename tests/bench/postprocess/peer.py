@@ -21,6 +21,8 @@ CASES = [
     ("two_grids_shared_group", 3, [(50, 2, True), (70, 2, False)]),
     ("five_groups", 4, [(40, 5, True)]),
     ("seven_groups_descending", 5, [(60, 7, False)]),
+    # sensor areas from a model's grid meshes (cells 0.1 to 1 m wide): area weighting
+    ("area_weighted", 6, [(30, 2, True), (45, 3, False)]),
 ]
 SUN_UP = [d * 24 + h for d in range(365) for h in range(6, 20)]  # 14 sun-up hours a day
 
@@ -68,11 +70,36 @@ def make_case(root: Path, name: str, seed: int, grids):
                 np.save(p / f"{gid}.npy", arr.astype(np.float32))
     (folder / "grids_info.json").write_text(json.dumps(grids_info, indent=2))
     (folder / "grid_states.json").write_text(json.dumps(grid_states, indent=2))
+    if name == "area_weighted":
+        write_model(root / name, rng, grids_info)
     # EN 17037 daylight hours: 4380 hours, a seeded random half of the year's hours
     hours = rng.permutation(8760)[:4380]
     sched = np.zeros(8760, dtype=int)
     sched[hours] = 1
     (root / name / "daylight_hours.csv").write_text("\n".join(map(str, sched)) + "\n")
+
+
+def write_model(case: Path, rng, grids_info):
+    """A honeybee model beside results/ whose sensor grids are meshes of one quad per
+    sensor, of random widths: honeybee's LEED weights by their face areas. The same areas
+    go to areas.json for daystep."""
+    from honeybee.model import Model
+    from honeybee_radiance.sensorgrid import SensorGrid
+    from ladybug_geometry.geometry3d import Mesh3D, Point3D
+
+    grids, areas = [], {}
+    for g in grids_info:
+        widths = rng.uniform(0.1, 1.0, g["count"])
+        x = np.concatenate([[0.0], np.cumsum(widths)])
+        verts = [Point3D(float(xi), y, 0.0) for xi in x for y in (0.0, 1.0)]
+        faces = [(2 * i, 2 * i + 2, 2 * i + 3, 2 * i + 1) for i in range(g["count"])]
+        grid = SensorGrid.from_mesh3d(g["full_id"], Mesh3D(verts, faces))
+        grids.append(grid)
+        areas[g["full_id"]] = [float(a) for a in grid.mesh.face_areas]
+    model = Model("peer_model")
+    model.properties.radiance.sensor_grids = grids
+    model.to_hbjson("model", folder=str(case))
+    (case / "areas.json").write_text(json.dumps(areas))
 
 
 def run_honeybee(root: Path):
@@ -129,7 +156,10 @@ def run_honeybee(root: Path):
                                                zero_array=True)
             if np.any(array):
                 array = np.apply_along_axis(filter_array, 1, array, results.occ_mask)
-            r = en17037_compute(array, g)
+            area_file = root / name / "areas.json"
+            area = (np.array(json.loads(area_file.read_text())[g["full_id"]])
+                    if area_file.exists() else None)
+            r = en17037_compute(array, g, area_array=area)
             levels = {}
             for tt, key in (("Target Illuminance", "target"), ("Minimum Illuminance", "minimum")):
                 for level, d in r["target_types"][tt]["levels"].items():
