@@ -13,6 +13,10 @@
 //!
 //! Illuminance is daylight only, lux; percentages are 0–100.
 
+pub mod en17037;
+pub mod leed;
+pub mod leed_schedule;
+
 use crate::error::{Error, Result};
 use chrono::{NaiveDateTime, TimeDelta, Timelike};
 use serde::{Deserialize, Serialize};
