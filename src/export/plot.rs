@@ -5,6 +5,7 @@
 
 use crate::error::{Error, Result};
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::Path;
 
 /// One rung of a curve.
@@ -84,6 +85,18 @@ fn ranges(curves: &[Curve]) -> ((f64, f64), (f64, f64)) {
     ((x0, x1), (y0, y1 * 1.6))
 }
 
+/// A relative error as a percentage with two significant digits at least (0.0021 %, 0.21 %,
+/// 2.1 %), so small errors do not all read "0.00 %".
+fn percent(v: f64) -> String {
+    let pct = 100.0 * v;
+    let decimals = if pct > 0.0 {
+        (1.0 - pct.log10().floor()).clamp(0.0, 6.0) as usize
+    } else {
+        0
+    };
+    format!("{pct:.decimals$} %")
+}
+
 fn draw(svg: &mut String, title: &str, curves: &[Curve]) -> std::result::Result<(), String> {
     let ((x0, x1), (y0, y1)) = ranges(curves);
     let root = SVGBackend::with_string(svg, (900, 600)).into_drawing_area();
@@ -103,7 +116,7 @@ fn draw(svg: &mut String, title: &str, curves: &[Curve]) -> std::result::Result<
         .x_desc("wall time of one cold instant, s (median of the repeats; bar: fastest to slowest)")
         .y_desc("RMS relative error vs the knob's finest setting")
         .x_labels(10)
-        .y_label_formatter(&|v| format!("{:.2} %", 100.0 * v))
+        .y_label_formatter(&|v| percent(*v))
         .draw()
         .map_err(|e| e.to_string())?;
     let floor = y0 * 1.3;
@@ -152,11 +165,22 @@ fn draw(svg: &mut String, title: &str, curves: &[Curve]) -> std::result::Result<
                 )))
                 .map_err(|e| e.to_string())?;
             let label = format!("ref: {}", p.reference.as_deref().unwrap_or_default());
+            // Right of the mark in the plot's left half, left of it in the right half, so
+            // the label stays inside the plot.
+            let h = if p.seconds > 0.5 * (x0 + x1) {
+                HPos::Right
+            } else {
+                HPos::Left
+            };
+            let style = ("sans-serif", 11)
+                .into_font()
+                .color(&color)
+                .pos(Pos::new(h, VPos::Center));
             chart
                 .draw_series(std::iter::once(Text::new(
                     label,
                     (p.seconds, y0 * 1.45),
-                    ("sans-serif", 11).into_font().color(&color),
+                    style,
                 )))
                 .map_err(|e| e.to_string())?;
         }
@@ -211,6 +235,14 @@ mod tests {
         assert!(s.contains("ref: reference sky") && s.contains("ref: 8192"));
         // Okabe–Ito without its yellow.
         assert!(s.contains("#E69F00") && !s.to_uppercase().contains("#F0E442"));
+    }
+
+    #[test]
+    fn error_labels_keep_two_significant_digits() {
+        assert_eq!(percent(0.01), "1.0 %");
+        assert_eq!(percent(0.1), "10 %");
+        assert_eq!(percent(1e-5), "0.0010 %");
+        assert_eq!(percent(0.0), "0 %");
     }
 
     #[test]
