@@ -388,7 +388,10 @@ fn opaque(id: &str, kd: Rgb) -> std::result::Result<Material, String> {
 
 /// The material of one modifier and the approximation made, if any; `Err` says why it
 /// cannot be modelled.
-fn convert(id: &str, m: ModifierJ) -> std::result::Result<(Material, Option<String>), String> {
+pub(super) fn convert(
+    id: &str,
+    m: ModifierJ,
+) -> std::result::Result<(Material, Option<String>), String> {
     let modified = "is itself modified by another modifier (a pattern, texture or mixture), \
                     which daystep cannot model; remove the modifier chain";
     let too_specular = |kind: &str, s: f64| {

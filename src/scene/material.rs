@@ -172,9 +172,16 @@ pub fn glass_transmittance_from_transmissivity(t: f64) -> f64 {
     pane(t.clamp(0.0, 1.0), 1.0)
 }
 
-/// Radiance's internal transmissivity of a pane of normal-incidence transmittance
-/// `tn` ∈ (0, 1], rationalised (A = C²) so small `tn` suffers no cancellation; it equals
-/// Radiance's expression to ~1e-8.
+/// Radiance's internal transmissivity (the number a `glass` primitive takes) of a pane of
+/// normal-incidence transmittance `tn` ∈ (0, 1] (n = 1.52): Radiance's transmittance →
+/// transmissivity conversion, rationalised (A = C²) so small `tn` suffers no
+/// cancellation; it equals Radiance's expression to ~1e-8. The inverse of
+/// [`glass_transmittance_from_transmissivity`].
+pub fn glass_transmissivity_from_transmittance(tn: f64) -> f64 {
+    transmissivity(tn)
+}
+
+/// [`glass_transmissivity_from_transmittance`], the name this file's formulas use.
 fn transmissivity(tn: f64) -> f64 {
     GLASS_B * tn / (((GLASS_C * GLASS_C + GLASS_B * tn * tn).sqrt() + GLASS_C) * GLASS_D)
 }
