@@ -264,7 +264,7 @@ impl Reader {
                 k += 1 + n;
                 lists.push(list);
             }
-            let reals = parse_reals(path, line, kind, id, &lists[2])?;
+            let reals = parse_reals(path, line, kind, id, &lists.pop().unwrap_or_default())?;
             let ints = lists.pop().unwrap_or_default();
             let strings = lists.pop().unwrap_or_default();
             let p = Primitive {

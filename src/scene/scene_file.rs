@@ -4,7 +4,7 @@
 //! Unknown keys are not errors but warnings, so files written for a newer daystep still load.
 //! Values are read as [`toml::Spanned`] so that range errors name their line.
 
-use super::{hbjson, obj, sensors, Faces, ModelInput, Scene};
+use super::{hbjson, obj, rad, sensors, Faces, ModelInput, Scene};
 use crate::error::{Error, Result};
 use crate::files;
 use crate::site::Site;
@@ -37,7 +37,8 @@ const KNOWN_SITE_KEYS: [&str; 4] = ["latitude", "longitude", "utc_offset_h", "el
 /// The scene file as written; unknown keys are ignored by serde (and reported separately).
 #[derive(Deserialize)]
 struct SceneToml {
-    geometry: Option<Spanned<String>>,
+    /// One file, or a list of Radiance files read in order as one scene.
+    geometry: Option<Spanned<toml::Value>>,
     sensors: Option<Spanned<String>>,
     up: Option<Spanned<String>>,
     north_deg: Option<Spanned<f64>>,
@@ -70,6 +71,13 @@ struct SiteToml {
 pub fn load(path: &Path) -> Result<Scene> {
     let parsed = if is_hbjson(path) {
         model_alone(path)
+    } else if rad::is_rad(path) {
+        return Err(Error::input(
+            path,
+            None,
+            None,
+            "a Radiance file cannot be the scene on its own: write a scene.toml with              `geometry = [\"materials.mat\", \"scene.rad\"]` (in oconv's order) and a [site]",
+        ));
     } else {
         let text = files::read_text(path)?;
         parse(path, &text)?
@@ -123,8 +131,21 @@ struct Geometry {
     warnings: Vec<String>,
 }
 
-/// Reads the geometry file by its extension: HBJSON, else OBJ.
-fn read_geometry(path: &Path, y_up: bool) -> Result<Geometry> {
+/// Reads the geometry files by their extension: Radiance (`.rad`, `.mat`, all read as one
+/// scene), HBJSON, else OBJ (the parser allows a list of Radiance files only).
+fn read_geometry(paths: &[PathBuf], y_up: bool) -> Result<Geometry> {
+    if paths.iter().all(|p| rad::is_rad(p)) {
+        let r = rad::load(paths)?;
+        return Ok(Geometry {
+            triangles: r.triangles,
+            materials: r.materials,
+            groups: r.groups,
+            sensors: Vec::new(),
+            imported: Default::default(),
+            warnings: r.warnings,
+        });
+    }
+    let path = &paths[0];
     if is_hbjson(path) {
         let h = hbjson::load(path)?;
         return Ok(Geometry {
@@ -151,7 +172,7 @@ fn read_geometry(path: &Path, y_up: bool) -> Result<Geometry> {
 /// `scene.toml` for everything else, and no site (a weather file or `--site` gives it).
 fn model_alone(path: &Path) -> Parsed {
     Parsed {
-        geometry: path.to_path_buf(),
+        geometry: vec![path.to_path_buf()],
         sensors: None,
         y_up: false,
         north_deg: 0.0,
@@ -165,7 +186,8 @@ fn model_alone(path: &Path) -> Parsed {
 /// A validated scene file, paths resolved.
 #[derive(Debug)]
 struct Parsed {
-    geometry: PathBuf,
+    /// One file, or Radiance files in the order given.
+    geometry: Vec<PathBuf>,
     sensors: Option<PathBuf>,
     y_up: bool,
     north_deg: f64,
@@ -173,6 +195,48 @@ struct Parsed {
     faces: Faces,
     site: Site,
     warnings: Vec<String>,
+}
+
+/// The file names `geometry` gives: one string, or a non-empty list of strings that are all
+/// Radiance files (`.rad`, `.mat`, read in order as one scene, as oconv takes them).
+fn geometry_files(
+    path: &Path,
+    g: &Spanned<toml::Value>,
+    at: &dyn Fn(Range<usize>) -> Option<usize>,
+) -> Result<Vec<Spanned<String>>> {
+    let err = |value: &str, message: &str| {
+        Error::input(
+            path,
+            at(g.span()),
+            Some(value),
+            format!("`geometry`: {message}"),
+        )
+    };
+    let one = |v: &toml::Value| {
+        v.as_str()
+            .map(|s| Spanned::new(g.span(), s.to_string()))
+            .ok_or_else(|| err(&v.to_string(), "expected a file name (a string)"))
+    };
+    match g.get_ref() {
+        toml::Value::Array(list) => {
+            let files = list.iter().map(one).collect::<Result<Vec<_>>>()?;
+            if files.is_empty() {
+                return Err(err("[]", "the list is empty"));
+            }
+            if files.len() > 1 {
+                if let Some(f) = files.iter().find(|f| !rad::is_rad(Path::new(f.get_ref()))) {
+                    return Err(err(
+                        f.get_ref(),
+                        "a list may only hold Radiance files (.rad, .mat), read in order as \
+                         one scene; an OBJ or HBJSON model is given alone, and formats cannot \
+                         be mixed (a .sky file is not needed: daystep makes its own sky)",
+                    ));
+                }
+            }
+            Ok(files)
+        }
+        v => Ok(vec![one(v)?]),
+    }
 }
 
 /// 1-based line of a byte offset.
@@ -228,15 +292,20 @@ fn parse(path: &Path, text: &str) -> Result<Parsed> {
             ))
         }
     };
-    let geometry = match &raw.geometry {
-        Some(g) => file("geometry", g)?,
-        None => return Err(Error::input(
-            path,
-            None,
-            None,
-            "missing required key `geometry` (the OBJ or HBJSON file, relative to the scene file)",
-        )),
-    };
+    let geometry =
+        match &raw.geometry {
+            Some(g) => geometry_files(path, g, &at)?
+                .iter()
+                .map(|f| file("geometry", f))
+                .collect::<Result<Vec<_>>>()?,
+            None => return Err(Error::input(
+                path,
+                None,
+                None,
+                "missing required key `geometry` (the OBJ or HBJSON file, or a list of Radiance \
+             files, relative to the scene file)",
+            )),
+        };
     let sensors = raw
         .sensors
         .as_ref()
@@ -259,12 +328,24 @@ fn parse(path: &Path, text: &str) -> Result<Parsed> {
         },
     };
 
-    if let Some(u) = raw.up.as_ref().filter(|_| y_up && is_hbjson(&geometry)) {
+    if let Some(u) = raw.up.as_ref().filter(|_| y_up && is_hbjson(&geometry[0])) {
         return Err(Error::input(
             path,
             at(u.span()),
             Some(u.get_ref()),
             "`up` does not apply to a Honeybee model (HBJSON is always Z-up): remove it",
+        ));
+    }
+    if let Some(u) = raw
+        .up
+        .as_ref()
+        .filter(|_| y_up && rad::is_rad(&geometry[0]))
+    {
+        return Err(Error::input(
+            path,
+            at(u.span()),
+            Some(u.get_ref()),
+            "`up` does not apply to Radiance files (Z-up, as gensky's sky): remove it",
         ));
     }
 
