@@ -34,9 +34,10 @@ pub(crate) struct Xform {
 /// below 1, more than [`MAX_COPIES`] copies, or no file (xform would read standard input).
 pub(crate) fn parse(path: &Path, line: usize, args: &[String]) -> Result<Xform> {
     let err = |v: &str, m: &str| Error::input(path, Some(line), Some(v), format!("!xform: {m}"));
+    // The transforms before any -a or -i apply once to the one copy.
     let mut stages: Vec<Stage> = vec![Stage {
         n: 1,
-        iterate: false,
+        iterate: true,
         t: DAffine3::IDENTITY,
     }];
     let mut out = Xform {
