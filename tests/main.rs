@@ -20,6 +20,7 @@ mod model_outputs; // a Honeybee model through the binary: grid column, --grids,
 mod models; // Honeybee HBJSON: as geometry and as SCENE, grids as sensors, mm = m, sky through a roof hole, exit 1 naming the object
 mod outputs; // outputs checked before the work; a resumed render keeps only frames of the same inputs
 mod parsers; // every parser under arbitrary and mutated input: no panic, hang or unbounded allocation
+mod rad_models; // Radiance .rad/.mat as geometry: honeybee's .rad = its HBJSON, sky through a roof hole, exit 1 naming file:line, arbitrary and mutated .rad
 mod render; // renders against closed forms: ρL, ρE cos θ/π, τ(θ)L, -i, threads
 mod pictures; // pictures cannot exhaust memory: huge or short RGBE and OpenEXR refused with exit 1 under ulimit -v
 mod numbers; // every number a user types is checked: flags, view files, scene-file values, exit 1 before any work

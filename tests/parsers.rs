@@ -65,7 +65,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-type CaseResult = Result<(), TestCaseError>;
+pub(crate) type CaseResult = Result<(), TestCaseError>;
 
 // ---------------------------------------------------------------------------------------
 // Running properties
@@ -85,7 +85,7 @@ type Current = Arc<Mutex<(Instant, String)>>;
 
 /// Runs `test` on `cases` inputs of `strategy` (no regression files, fixed seed) and fails
 /// the test with the shrunk input when the property fails; a watchdog aborts on a hang.
-fn check<S: Strategy>(cases: u32, strategy: S, test: impl Fn(S::Value) -> CaseResult) {
+pub(crate) fn check<S: Strategy>(cases: u32, strategy: S, test: impl Fn(S::Value) -> CaseResult) {
     let defaults = Config::default();
     let config = Config {
         cases: if std::env::var_os("PROPTEST_CASES").is_some() {
@@ -140,7 +140,7 @@ impl Drop for Stop {
 
 /// Runs `f`: its value, or a failure naming a panic (with its message) or a call slower
 /// than [`SLOW`].
-fn guarded<T>(f: impl FnOnce() -> T) -> Result<T, TestCaseError> {
+pub(crate) fn guarded<T>(f: impl FnOnce() -> T) -> Result<T, TestCaseError> {
     let start = Instant::now();
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
     let took = start.elapsed();
@@ -244,13 +244,13 @@ fn hostile_values() -> Vec<String> {
 
 /// How a format splits a line into fields.
 #[derive(Clone, Copy)]
-enum Sep {
+pub(crate) enum Sep {
     Whitespace,
     Comma,
 }
 
 /// One format's mutation material.
-struct Format {
+pub(crate) struct Format {
     sep: Sep,
     /// Field values to try: [`hostile_values`] and the format's own.
     values: Vec<String>,
@@ -260,7 +260,7 @@ struct Format {
 
 impl Format {
     /// `values`: the format's own values, separated by single spaces; `lines`: one per line.
-    fn new(sep: Sep, values: &str, lines: &str) -> Format {
+    pub(crate) fn new(sep: Sep, values: &str, lines: &str) -> Format {
         let mut v = hostile_values();
         v.extend(values.split(' ').map(String::from));
         Format {
@@ -272,7 +272,7 @@ impl Format {
 }
 
 #[derive(Clone, Debug)]
-enum Edit {
+pub(crate) enum Edit {
     Delete(Index),
     Duplicate(Index),
     Swap(Index, Index),
@@ -284,12 +284,12 @@ enum Edit {
 
 /// One to four edits, then perhaps a cut at a random byte.
 #[derive(Clone, Debug)]
-struct Mutation {
+pub(crate) struct Mutation {
     edits: Vec<Edit>,
     cut: Option<Index>,
 }
 
-fn mutations() -> impl Strategy<Value = Mutation> {
+pub(crate) fn mutations() -> impl Strategy<Value = Mutation> {
     let edit = prop_oneof![
         1 => any::<Index>().prop_map(Edit::Delete),
         1 => any::<Index>().prop_map(Edit::Duplicate),
@@ -352,7 +352,7 @@ fn mutate(sample: &str, m: &Mutation, f: &Format) -> Vec<u8> {
 }
 
 /// [`mutate`] for parsers of `&str`: the cut moves back to a character boundary.
-fn mutate_text(sample: &str, m: &Mutation, f: &Format) -> String {
+pub(crate) fn mutate_text(sample: &str, m: &Mutation, f: &Format) -> String {
     let bytes = mutate(sample, m, f);
     match String::from_utf8(bytes) {
         Ok(s) => s,
@@ -366,12 +366,12 @@ fn mutate_text(sample: &str, m: &Mutation, f: &Format) -> String {
 }
 
 /// Arbitrary text: any characters, newlines included.
-fn any_text() -> impl Strategy<Value = String> {
+pub(crate) fn any_text() -> impl Strategy<Value = String> {
     "(?s).{0,600}"
 }
 
 /// Text matching `pattern` (a regular expression built at run time).
-fn regex(pattern: &str) -> impl Strategy<Value = String> {
+pub(crate) fn regex(pattern: &str) -> impl Strategy<Value = String> {
     prop::string::string_regex(pattern).expect("a valid pattern")
 }
 
@@ -383,19 +383,19 @@ fn any_bytes() -> impl Strategy<Value = Vec<u8>> {
 // Checks
 
 /// How an error may name its file.
-struct Naming<'a> {
+pub(crate) struct Naming<'a> {
     /// The files the parser may blame (an error naming any other path fails).
-    files: &'a [PathBuf],
+    pub(crate) files: &'a [PathBuf],
     /// Messages of errors about a whole file, which need no line.
-    whole_file: &'a [&'a str],
+    pub(crate) whole_file: &'a [&'a str],
     /// True when a one-word value must appear on the named line (line-based formats whose
     /// values are quoted as written).
-    value_on_line: bool,
+    pub(crate) value_on_line: bool,
 }
 
 /// Checks that `e` is an input or I/O error naming one of `n.files` and, unless it is about
 /// a whole file, a line that exists (and, where asked, holds the quoted value).
-fn check_error(e: &Error, n: &Naming<'_>) -> CaseResult {
+pub(crate) fn check_error(e: &Error, n: &Naming<'_>) -> CaseResult {
     let shown = e.to_string();
     match e {
         Error::Input {
@@ -512,7 +512,7 @@ fn check_scene(s: &Scene) -> CaseResult {
     Ok(())
 }
 
-fn check_materials(materials: &[daystep::scene::Material]) -> CaseResult {
+pub(crate) fn check_materials(materials: &[daystep::scene::Material]) -> CaseResult {
     for m in materials {
         let a = |v: DVec3| v.to_array();
         prop_assert!(a(m.kd).iter().all(|&x| (0.0..1.0).contains(&x)), "{:?}", m);
