@@ -18,6 +18,8 @@ pub(crate) enum Item {
 /// # Errors
 /// [`Error::Input`] for an unterminated quoted string (naming its line).
 pub(crate) fn lex(path: &Path, text: &str) -> Result<Vec<Item>> {
+    // Files written on Windows: a `\` before CR LF continues a command too.
+    let text = text.replace("\r\n", "\n");
     let mut out = Vec::new();
     let mut line = 1;
     let mut chars = text.chars().peekable();

@@ -85,6 +85,13 @@ fn lexer_splits_words_strings_comments_and_continued_commands() {
 }
 
 #[test]
+fn lexer_reads_windows_line_ends() {
+    let items = lex(&p(), "!xform -t 1 0 0 \\\r\n a.rad\r\nx\r\n").unwrap();
+    assert_eq!(items[0], Item::Command(words("xform -t 1 0 0 a.rad"), 1));
+    assert_eq!(items[1], Item::Word("x".into(), 3));
+}
+
+#[test]
 fn lexer_refuses_unterminated_strings_naming_the_line() {
     for text in ["void plastic \"open 0 0 5 1 1 1 0 0", "\n\n!xform 'a.rad"] {
         let (line, msg) = match lex(&p(), text).unwrap_err() {

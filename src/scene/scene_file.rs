@@ -66,8 +66,9 @@ struct SiteToml {
 /// referenced file that does not exist, a value out of range (latitude outside [−90, 90],
 /// longitude outside [−180, 180], `utc_offset_h` outside [−14, 14], `elevation_m` outside
 /// [−1000, 10000] (the EPW header's range), `ground_reflectance` outside [0, 1), anything
-/// non-finite (TOML spells `nan` and `inf`), `up` not "z" or "y"), and every error of
-/// [`obj::load`] and [`sensors::load`]. [`Error::Io`] when a file cannot be read.
+/// non-finite (TOML spells `nan` and `inf`), `up` not "z" or "y", a `geometry` list that
+/// is empty or holds anything but Radiance files), and every error of [`obj::load`],
+/// [`hbjson::load`], [`rad::load`] and [`sensors::load`]. [`Error::Io`] when a file cannot be read.
 pub fn load(path: &Path) -> Result<Scene> {
     let parsed = if is_hbjson(path) {
         model_alone(path)
