@@ -202,18 +202,18 @@ fn convergence_ladder_writes_csv_plot_and_advice() {
     assert_eq!(rms[3], 0.0);
     assert!(rms[0] > rms[2], "{rms:?}");
     assert_eq!(rows.iter().filter(|r| r[7] == "true").count(), 1);
-    // Each rung timed twice: the median lies within its spread; only the finest rung is
+    // Each rung timed twice: the median CPU time lies within its spread; only the finest rung is
     // the reference, and the plot labels it rather than drawing its zero.
     for r in &rows {
         let (t, lo, hi): (f64, f64, f64) = (
-            r[2].parse().unwrap(),
             r[8].parse().unwrap(),
             r[9].parse().unwrap(),
+            r[10].parse().unwrap(),
         );
-        assert!(lo <= t && t <= hi, "{r:?}");
-        assert_eq!(r[10], "2");
+        assert!(0.0 < lo && lo <= t && t <= hi, "{r:?}");
+        assert_eq!(r[11], "2");
     }
-    let refs: Vec<bool> = rows.iter().map(|r| r[11] == "true").collect();
+    let refs: Vec<bool> = rows.iter().map(|r| r[12] == "true").collect();
     assert_eq!(refs, [false, false, false, true]);
     let svg = std::fs::read_to_string(out.join("convergence.svg")).unwrap();
     assert!(

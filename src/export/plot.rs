@@ -11,7 +11,7 @@ use std::path::Path;
 /// One rung of a curve.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Point {
-    /// Median wall time, s.
+    /// Median time (CPU time for a convergence study), s.
     pub seconds: f64,
     /// Fastest and slowest timed run, s (drawn as a horizontal bar).
     pub seconds_min: f64,
@@ -113,7 +113,7 @@ fn draw(svg: &mut String, title: &str, curves: &[Curve]) -> std::result::Result<
         .map_err(|e| e.to_string())?;
     chart
         .configure_mesh()
-        .x_desc("wall time of one cold instant, s (median of the repeats; bar: fastest to slowest)")
+        .x_desc("CPU time of one cold instant, s (median of the repeats; bar: least to most)")
         .y_desc("RMS relative error vs the knob's finest setting")
         .x_labels(10)
         .y_label_formatter(&|v| percent(*v))
