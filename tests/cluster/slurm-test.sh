@@ -328,13 +328,20 @@ echo "$submitted"
 read -r array merge <<<"$(job_ids "$submitted")"
 shard_dir=$ROOT/runs/$study/shard-$victim
 partial=$shard_dir/illuminance.csv.partial
+partial_sun=$shard_dir/direct_sun.csv.partial
 until_state "${array}_$victim" RUNNING
-# A checkpoint is a whole batch of 8 days (24 hourly rows a day) behind the header.
+# A checkpoint is a whole batch of 8 days (24 hourly rows a day) behind the header, in both
+# tables.
 rows=$((8 * 24))
+rows_in() { # FILE → its rows after the header (0 when absent)
+  if [[ -f $1 ]]; then
+    echo $(($(wc -l <"$1") - 1))
+  else
+    echo 0
+  fi
+}
 while :; do
-  n=0
-  [[ -f $partial ]] && n=$(($(wc -l <"$partial") - 1))
-  ((n >= rows)) && break
+  (($(rows_in "$partial") >= rows && $(rows_in "$partial_sun") >= rows)) && break
   [[ -f $shard_dir/illuminance.csv ]] && fail "shard $victim finished before its first checkpoint was seen; lengthen the period"
   s=$(state_of "${array}_$victim")
   [[ $s == RUNNING ]] || fail "array task ${array}_$victim is $s before its first checkpoint"
@@ -343,7 +350,7 @@ while :; do
 done
 scontrol requeue "${array}_$victim"
 t_kill=$SECONDS
-killed_rows=$(($(wc -l <"$partial") - 1))
+killed_rows=$(rows_in "$partial")
 [[ ! -f $shard_dir/illuminance.csv ]] || fail "shard $victim had finished when it was requeued; lengthen the period"
 say "requeued array task ${array}_$victim mid-shard: $killed_rows rows in its checkpoint, no final table yet"
 until_state "$merge" COMPLETED
