@@ -28,7 +28,7 @@ repo=$(cd "$(dirname "$0")/../.." && pwd)
 # shellcheck disable=SC2034 # used by the documented block, through eval
 examples=$repo/docs/examples/cluster
 shards=4
-# The recipe's period: two weeks around the priming day (21 June).
+# The recipe's period: two weeks of June.
 recipe_start=2021-06-14
 recipe_end=2021-06-27
 # The preemption study's: 40 days, 10 per shard, so that a shard writes a checkpoint (a batch
