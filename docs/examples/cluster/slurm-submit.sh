@@ -12,7 +12,9 @@
 #   done
 #
 # ROOT, SCENE, CACHE, QUALITY, ANNUAL_ARGS, STEP and MERGE_ARGS are passed on to the jobs
-# from the environment (see slurm-annual.sbatch and slurm-merge.sbatch).
+# from the environment (see slurm-annual.sbatch and slurm-merge.sbatch). DEPENDENCY, if set,
+# is the shard array's sbatch --dependency, e.g. DEPENDENCY=afterany:1234 to start after the
+# job that primes the cache (sbatch itself reads no environment variable for it).
 
 set -euo pipefail
 
@@ -26,7 +28,11 @@ shards=${3:-8}
 here=$(dirname "$0")
 
 vars="ALL,STUDY=$study,WEATHER=$weather,SHARDS=$shards"
-array=$(sbatch --parsable --array=1-"$shards" --job-name="daystep-$study" \
+after=()
+if [[ -n ${DEPENDENCY:-} ]]; then
+  after=(--dependency="$DEPENDENCY")
+fi
+array=$(sbatch --parsable ${after[@]+"${after[@]}"} --array=1-"$shards" --job-name="daystep-$study" \
   --export="$vars" "$here/slurm-annual.sbatch")
 array=${array%%;*} # --parsable prints "jobid" or "jobid;cluster"
 merge=$(sbatch --parsable --dependency=afterok:"$array" --job-name="daystep-$study-merge" \
