@@ -334,7 +334,7 @@ pub struct ConvergenceArgs {
     pub target: f64,
     /// Timed runs per setting (1–20): the cost is their median, and settings whose
     /// fastest-to-slowest spreads overlap count as equal in cost.
-    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=20))]
+    #[arg(long, default_value_t = 3, value_parser = whole(1u32, 20, "runs"))]
     pub repeats: u32,
     /// Seed of the interreflection.
     #[arg(long)]
