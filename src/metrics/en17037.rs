@@ -136,27 +136,13 @@ pub fn daylight_hours(diffuse_horizontal: &[f64]) -> Result<Vec<bool>> {
 /// Share (%) of the space where `pass`, and the weight: honeybee's `pass_mask.mean() × 100`
 /// by count, `(area passing / area) × 100` by area.
 fn space_pct(pass: &[bool], areas: Option<&[f64]>) -> (f64, f64) {
-    match areas {
-        Some(a) => {
-            let total: f64 = a.iter().sum();
-            let yes: f64 = a
-                .iter()
-                .zip(pass)
-                .filter(|(_, p)| **p)
-                .map(|(a, _)| a)
-                .sum();
-            let pct = if total > 0.0 {
-                yes / total * 100.0
-            } else {
-                0.0
-            };
-            (pct, total)
-        }
-        None => {
-            let n = pass.len() as f64;
-            (pass.iter().filter(|p| **p).count() as f64 / n * 100.0, n)
-        }
-    }
+    let (yes, total) = super::leed::share(pass, areas);
+    let pct = if total > 0.0 {
+        yes / total * 100.0
+    } else {
+        0.0
+    };
+    (pct, total)
 }
 
 fn validate(grid: &En17037Grid, steps: usize) -> Result<()> {

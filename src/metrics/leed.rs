@@ -349,8 +349,9 @@ fn da_counts(
     counts
 }
 
-/// Weighted share (%) of sensors where `pass`, and the total weight.
-fn share(pass: &[bool], areas: Option<&[f64]>) -> (f64, f64) {
+/// The weight of the sensors where `pass`, and the total weight: areas (m²) when given,
+/// else counts.
+pub(super) fn share(pass: &[bool], areas: Option<&[f64]>) -> (f64, f64) {
     match areas {
         Some(a) => {
             let total: f64 = a.iter().sum();
