@@ -401,11 +401,14 @@ pub(super) fn convert(
              reflectance is kept) or a diffuse modifier"
         )
     };
+    // Plastic and metal share a body below; which one it is, before `m` is taken apart.
+    let metal = matches!(m, ModifierJ::Metal(_));
     match m {
         ModifierJ::Plastic(p) | ModifierJ::Metal(p) if !unmodified(&p.modifier) => {
             Err(modified.into())
         }
-        ModifierJ::Plastic(p) => {
+        ModifierJ::Plastic(p) | ModifierJ::Metal(p) => {
+            let kind = if metal { "metal" } else { "plastic" };
             let c = channels(
                 "reflectance",
                 [p.r_reflectance, p.g_reflectance, p.b_reflectance],
@@ -417,37 +420,19 @@ pub(super) fn convert(
                 ));
             }
             if s > MAX_SPECULARITY {
-                return Err(too_specular("plastic", s));
+                return Err(too_specular(kind, s));
             }
-            // Radiance plastic reflects c (1 − s) diffusely and s specularly.
-            let m = opaque(id, c * (1.0 - s) + Rgb::splat(s))?;
+            // Radiance plastic reflects c (1 − s) diffusely and s specularly (white
+            // highlights); metal reflects c (1 − s) and c s (coloured ones).
+            let total = if metal {
+                c
+            } else {
+                c * (1.0 - s) + Rgb::splat(s)
+            };
+            let m = opaque(id, total)?;
             let w = (s > 0.0).then(|| {
                 format!(
-                    "(plastic, specularity {s}): its specular part is reflected diffusely \
-                     (total reflectance kept)"
-                )
-            });
-            Ok((m, w))
-        }
-        ModifierJ::Metal(p) => {
-            let c = channels(
-                "reflectance",
-                [p.r_reflectance, p.g_reflectance, p.b_reflectance],
-            )?;
-            let s = p.specularity;
-            if !(s.is_finite() && s >= 0.0) {
-                return Err(format!(
-                    "has specularity {s}: it must be a number in [0, 1]"
-                ));
-            }
-            if s > MAX_SPECULARITY {
-                return Err(too_specular("metal", s));
-            }
-            // Radiance metal reflects c (1 − s) diffusely and c s specularly.
-            let m = opaque(id, c)?;
-            let w = (s > 0.0).then(|| {
-                format!(
-                    "(metal, specularity {s}): its specular part is reflected diffusely \
+                    "({kind}, specularity {s}): its specular part is reflected diffusely \
                      (total reflectance kept)"
                 )
             });
