@@ -40,6 +40,9 @@ pub struct ApertureGroup {
     /// state that keeps the object's own modifier). The scene holds every member in its
     /// default modifier.
     pub states: Vec<String>,
+    /// The shaded state's diffuse visible transmittance, where `scene.toml` gives it
+    /// (`[aperture_groups.NAME] shade_transmittance`); `None`: the default.
+    pub shade_transmittance: Option<f64>,
 }
 
 /// Bad geometry met while importing, each also listed in the scene's warnings with the

@@ -2,6 +2,7 @@
 //! converted to one frame: metres, right-handed, x east, y north, z up, with a local origin
 //! subtracted so far-from-origin models keep full precision.
 
+mod aperture_groups;
 pub mod faces;
 pub mod grids;
 pub mod hbjson;

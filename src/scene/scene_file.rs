@@ -22,7 +22,8 @@ pub const NO_SITE_WARNING: &str =
 pub const DEFAULT_GROUND_REFLECTANCE: f64 = 0.2;
 
 /// Top-level keys of a scene file.
-const KNOWN_KEYS: [&str; 7] = [
+const KNOWN_KEYS: [&str; 8] = [
+    "aperture_groups",
     "geometry",
     "faces",
     "sensors",
@@ -45,6 +46,7 @@ struct SceneToml {
     ground_reflectance: Option<Spanned<f64>>,
     faces: Option<Spanned<String>>,
     site: Option<SiteToml>,
+    aperture_groups: Option<super::aperture_groups::GroupsToml>,
 }
 
 /// The `[site]` table as written.
@@ -84,6 +86,26 @@ pub fn load(path: &Path) -> Result<Scene> {
         parse(path, &text)?
     };
     let mut geometry = read_geometry(&parsed.geometry, parsed.y_up)?;
+    if let Some((groups, text)) = &parsed.aperture_groups {
+        if !geometry.imported.aperture_groups.is_empty() {
+            return Err(Error::input(
+                path,
+                None,
+                Some("aperture_groups"),
+                "the model brings its own aperture groups (HBJSON dynamic groups); remove \
+                 [aperture_groups] from the scene file",
+            ));
+        }
+        let line = |span: Range<usize>| Some(line_of(text, span.start));
+        geometry.imported.aperture_groups = super::aperture_groups::resolve(
+            path,
+            &line,
+            groups,
+            &geometry.materials,
+            &geometry.triangles,
+            &geometry.groups,
+        )?;
+    }
     let sensors = match &parsed.sensors {
         Some(p) => {
             // The .pts file replaces the model's grids as the sensors.
@@ -181,6 +203,7 @@ fn model_alone(path: &Path) -> Parsed {
         faces: Faces::Both,
         site: Site::default(),
         warnings: vec![format!("{}: {NO_SITE_WARNING}", path.display())],
+        aperture_groups: None,
     }
 }
 
@@ -196,6 +219,8 @@ struct Parsed {
     faces: Faces,
     site: Site,
     warnings: Vec<String>,
+    /// `[aperture_groups.*]` as written, and the scene file's text for their lines.
+    aperture_groups: Option<(super::aperture_groups::GroupsToml, String)>,
 }
 
 /// The file names `geometry` gives: one string, or a non-empty list of strings that are all
@@ -442,6 +467,7 @@ fn parse(path: &Path, text: &str) -> Result<Parsed> {
         faces,
         site,
         warnings,
+        aperture_groups: raw.aperture_groups.map(|g| (g, text.to_string())),
     })
 }
 

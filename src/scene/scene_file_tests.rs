@@ -260,3 +260,50 @@ fn errors_from_referenced_files_propagate() {
     assert!(shown.contains("a.obj:1:"), "{shown}");
     assert_eq!((line, value.as_deref()), (Some(1), Some("NaN")));
 }
+
+#[test]
+fn aperture_groups_name_glazing_materials_and_list_their_members() {
+    let geometry = "geometry = \"geo/a.obj\"\n";
+    let (_d, r) = load_scene(&format!(
+        "{geometry}[aperture_groups.south]\nmaterials = [\"glass\"]\nshade_transmittance = 0.05\n"
+    ));
+    let s = r.unwrap();
+    let g = &s.imported.aperture_groups;
+    assert_eq!(g.len(), 1);
+    assert_eq!(g[0].identifier, "south");
+    // The OBJ group whose triangles use the glass.
+    assert_eq!(g[0].members, ["window"]);
+    assert_eq!(g[0].shade_transmittance, Some(0.05));
+    // Errors name the scene file, the table's line and the value.
+    let cases = [
+        ("[aperture_groups.s]\nmaterials = [\"wall\"]\n", "wall", "not glazing"),
+        ("[aperture_groups.s]\nmaterials = [\"steel\"]\n", "steel", "glass"),
+        ("[aperture_groups.s]\nmaterials = []\n", "s", "no materials"),
+        (
+            "[aperture_groups.s]\nmaterials = [\"glass\"]\nshade_transmittance = 1.5\n",
+            "1.5",
+            "[0, 1]",
+        ),
+        (
+            "[aperture_groups.a]\nmaterials = [\"glass\"]\n[aperture_groups.b]\nmaterials = [\"glass\"]\n",
+            "glass",
+            "`a` and `b`",
+        ),
+    ];
+    for (table, value, says) in cases {
+        let (_d, r) = load_scene(&format!("{geometry}{table}"));
+        let (shown, line, v) = input_error(r.unwrap_err());
+        assert_eq!(v.as_deref(), Some(value), "{shown}");
+        assert!(line.is_some_and(|l| l >= 2), "{shown}");
+        assert!(
+            shown.contains("scene.toml") && shown.contains(says),
+            "{shown}"
+        );
+    }
+    // A key the table does not know is a syntax-level error naming its line.
+    let (_d, r) = load_scene(&format!(
+        "{geometry}[aperture_groups.s]\nmaterials = [\"glass\"]\nshade = 0.1\n"
+    ));
+    let (shown, line, _) = input_error(r.unwrap_err());
+    assert_eq!(line, Some(4), "{shown}");
+}

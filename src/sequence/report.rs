@@ -123,6 +123,8 @@ pub struct ApertureGroupReport {
     pub members: Vec<String>,
     /// Its states' modifiers, in order.
     pub states: Vec<String>,
+    /// The shaded state's diffuse visible transmittance, where the scene file gives it.
+    pub shade_transmittance: Option<f64>,
 }
 
 /// Counts of bad geometry in [`ModelReport`].
@@ -175,6 +177,7 @@ impl ModelReport {
                     identifier: g.identifier.clone(),
                     members: g.members.clone(),
                     states: g.states.clone(),
+                    shade_transmittance: g.shade_transmittance,
                 })
                 .collect(),
             rooms: m.rooms.clone(),
