@@ -66,39 +66,50 @@ pub(crate) fn lex(path: &Path, text: &str) -> Result<Vec<Item>> {
         }
         at_line_start = false;
         let start = line;
-        let mut word = String::new();
-        while let Some(&c) = chars.peek() {
-            if c.is_whitespace() {
-                break;
-            }
-            chars.next();
-            if c == '"' || c == '\'' {
-                let mut closed = false;
-                for q in chars.by_ref() {
-                    if q == c {
-                        closed = true;
-                        break;
-                    }
-                    if q == '\n' {
-                        line += 1;
-                    }
-                    word.push(q);
-                }
-                if !closed {
-                    return Err(Error::input(
-                        path,
-                        Some(start),
-                        Some(&word.chars().take(40).collect::<String>()),
-                        "unterminated quoted string",
-                    ));
-                }
-            } else {
-                word.push(c);
-            }
+        let (word, closed) = take_word(&mut chars, &mut line);
+        if !closed {
+            return Err(Error::input(
+                path,
+                Some(start),
+                Some(&word.chars().take(40).collect::<String>()),
+                "unterminated quoted string",
+            ));
         }
         out.push(Item::Word(word, start));
     }
     Ok(out)
+}
+
+/// One word up to the next whitespace, quotes (`"` or `'`) taken out and what they hold
+/// kept whole; counts the newlines inside quotes into `line`. False when a quote is not
+/// closed (the word then holds what was read).
+fn take_word(chars: &mut std::iter::Peekable<std::str::Chars>, line: &mut usize) -> (String, bool) {
+    let mut word = String::new();
+    while let Some(&c) = chars.peek() {
+        if c.is_whitespace() {
+            break;
+        }
+        chars.next();
+        if c == '"' || c == '\'' {
+            let mut closed = false;
+            for q in chars.by_ref() {
+                if q == c {
+                    closed = true;
+                    break;
+                }
+                if q == '\n' {
+                    *line += 1;
+                }
+                word.push(q);
+            }
+            if !closed {
+                return (word, false);
+            }
+        } else {
+            word.push(c);
+        }
+    }
+    (word, true)
 }
 
 /// Words of a command line, honouring quotes.
@@ -110,32 +121,14 @@ fn split_words(path: &Path, s: &str, line: usize) -> Result<Vec<String>> {
             chars.next();
             continue;
         }
-        let mut word = String::new();
-        while let Some(&c) = chars.peek() {
-            if c.is_whitespace() {
-                break;
-            }
-            chars.next();
-            if c == '"' || c == '\'' {
-                let mut closed = false;
-                for q in chars.by_ref() {
-                    if q == c {
-                        closed = true;
-                        break;
-                    }
-                    word.push(q);
-                }
-                if !closed {
-                    return Err(Error::input(
-                        path,
-                        Some(line),
-                        Some(s.trim()),
-                        "unterminated quoted string in command",
-                    ));
-                }
-            } else {
-                word.push(c);
-            }
+        let (word, closed) = take_word(&mut chars, &mut 0);
+        if !closed {
+            return Err(Error::input(
+                path,
+                Some(line),
+                Some(s.trim()),
+                "unterminated quoted string in command",
+            ));
         }
         out.push(word);
     }
