@@ -15,6 +15,7 @@ mod extent; // site context of any size: the office on a 1 km ground and in a ri
 mod extremes; // low sun, polar day and night, turbidity limits, slivers, far coordinates
 mod imagesky; // HDR image skies: uniform image πL, images of the CIE overcast sky in both mappings
 mod generated_scenes; // the generated office and building: areas, normals, closure, triangle target, bundled files
+mod leed; // annual --leed: light paths of two aperture groups sum to the room, the 2 % rule, DA from paths and schedule; EN 17037 needs a whole year
 mod layers; // the layer rule of lib.rs: lower layers never import higher ones
 mod model_outputs; // a Honeybee model through the binary: grid column, --grids, per-grid annual outputs, --view-name
 mod models; // Honeybee HBJSON: as geometry and as SCENE, grids as sensors, mm = m, sky through a roof hole, exit 1 naming the object

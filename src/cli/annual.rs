@@ -75,6 +75,8 @@ pub fn run(a: AnnualArgs) -> Result<()> {
         metrics: config::metric_params(&a.metrics)?,
         ill: a.ill,
         surfaces: a.surfaces,
+        leed: a.leed,
+        en17037: a.en17037,
         daylight_coefficients: !a.forward,
         ..AnnualOptions::default()
     };

@@ -386,6 +386,15 @@ pub struct AnnualArgs {
     /// and, for glazing, transmitted solar power (W).
     #[arg(long)]
     pub surfaces: bool,
+    /// LEED v4.1 Daylight Option 1 with operable blinds (sDA300/50% with the blind
+    /// schedule, ASE1000,250h, points): leed.json, leed_blinds.csv, leed_sensors.csv. Each
+    /// aperture group's light is a run of its own under paths/.
+    #[arg(long)]
+    pub leed: bool,
+    /// EN 17037 daylight provision (minimum, medium, high): en17037.json. Needs the whole
+    /// year of an hourly weather file.
+    #[arg(long)]
+    pub en17037: bool,
     /// Solve the interreflection at every step (warm-started within each day) instead of
     /// summing cached daylight coefficients: slower, and what the coefficients are
     /// checked against (--surfaces implies it).

@@ -100,6 +100,7 @@ pub(super) fn resolve(
             members,
             states: vec!["default".into(), "shade".into()],
             shade_transmittance: g.shade_transmittance,
+            materials: g.materials.clone(),
         });
     }
     Ok(out)

@@ -43,6 +43,10 @@ pub struct ApertureGroup {
     /// The shaded state's diffuse visible transmittance, where `scene.toml` gives it
     /// (`[aperture_groups.NAME] shade_transmittance`); `None`: the default.
     pub shade_transmittance: Option<f64>,
+    /// The glazing materials that make the group, when `scene.toml` defines it by
+    /// material: only its members' triangles of these materials belong to it. Empty: every
+    /// glazing triangle of its members (HBJSON).
+    pub materials: Vec<String>,
 }
 
 /// Bad geometry met while importing, each also listed in the scene's warnings with the

@@ -68,6 +68,13 @@ pub struct AnnualOptions {
     pub response_max_bytes: u64,
     /// Also write `surfaces.csv` (per group: incident irradiance, transmitted solar power).
     pub surfaces: bool,
+    /// LEED v4.1 Daylight Option 1 with operable blinds: `leed.json`, `leed_blinds.csv`,
+    /// `leed_sensors.csv` (runs each aperture group's light path under `paths/`).
+    pub leed: bool,
+    /// EN 17037 daylight provision: `en17037.json` (a whole hourly year).
+    pub en17037: bool,
+    /// Write only the time series and `report.json` (no metrics): the light-path runs.
+    pub series_only: bool,
 }
 
 impl Default for AnnualOptions {
@@ -81,6 +88,9 @@ impl Default for AnnualOptions {
             daylight_coefficients: true,
             response_max_bytes: RESPONSE_MAX_BYTES,
             surfaces: false,
+            leed: false,
+            en17037: false,
+            series_only: false,
         }
     }
 }
@@ -140,6 +150,9 @@ pub struct AnnualReport {
     /// The imported model's grids, views and aperture groups, when it has any.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub model: Option<super::report::ModelReport>,
+    /// What `--leed` / `--en17037` did, when asked for.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub compliance: Option<super::compliance::ComplianceReport>,
     /// Whether the run was stopped before its end (Ctrl-C); rerun to continue.
     pub interrupted: bool,
 }
@@ -226,6 +239,7 @@ pub fn run_annual(
     }
     let total_steps: usize = days.iter().map(|d| d.len()).sum();
     report.steps = total_steps;
+    super::compliance::check(weather, opts, total_steps)?;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let sensors = scene.sensors.len();
     // Which columns belong to which grid, for the metrics, merges and per-grid .ill files.
@@ -404,7 +418,7 @@ pub fn run_annual(
         if let Some(w) = w_surf.take() {
             w.finish()?;
         }
-        if n == 1 {
+        if n == 1 && !opts.series_only {
             let tm = Instant::now();
             write_metrics(out, weather.interval_minutes, &opts.metrics)?;
             if opts.ill {
@@ -419,10 +433,35 @@ pub fn run_annual(
             report
                 .stage_seconds
                 .push(("metrics".into(), tm.elapsed().as_secs_f64()));
+            if opts.leed || opts.en17037 {
+                let run = super::compliance::Run {
+                    scene,
+                    weather,
+                    quality,
+                    store,
+                    out,
+                    opts,
+                    control,
+                    plan: days.iter().flatten().map(|s| s.record).collect(),
+                };
+                let c = super::compliance::compliance(&run)?;
+                report.interrupted |= c.report.interrupted;
+                report.compliance = Some(c.report);
+            }
+        } else if opts.series_only {
+            report
+                .skipped
+                .push("metrics: a light path of --leed (the main run has them)".into());
         } else {
             report
                 .skipped
                 .push("metrics: a shard; `daystep merge` computes them".into());
+            if opts.leed || opts.en17037 {
+                report.skipped.push(
+                    "--leed/--en17037: a shard; run them unsharded (the cache makes it cheap)"
+                        .into(),
+                );
+            }
         }
         if !opts.ill {
             report

@@ -23,6 +23,8 @@ pub mod df;
 pub mod convergence;
 pub mod annual;
 pub mod merge;
+pub mod light_paths;
+pub mod compliance;
 pub mod surfaces;
 pub mod render;
 pub mod report;

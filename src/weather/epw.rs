@@ -40,6 +40,10 @@ const DEW_POINT: usize = 7;
 const DNI: usize = 14;
 /// Index of the diffuse horizontal irradiance field.
 const DHI: usize = 15;
+/// Index of the diffuse horizontal illuminance field (optional: files may stop before it).
+const DIFFUSE_ILLUMINANCE: usize = 18;
+/// EPW's missing-value code for illuminance (and anything above it).
+const MISSING_ILLUMINANCE: f64 = 999_999.0;
 /// EPW's missing-value code for irradiance.
 const MISSING_IRRADIANCE: f64 = 9999.0;
 /// EPW's missing-value code for the dew point (and anything above it).
@@ -63,6 +67,7 @@ struct Row {
     dni: Option<f64>,
     dhi: Option<f64>,
     dew: Option<f64>,
+    diffuse_lux: Option<f64>,
     /// `year,month,day,hour` as written, for error messages.
     stamp: String,
 }
@@ -193,6 +198,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Weather> {
             dni: r.dni.unwrap_or(0.0),
             dhi: r.dhi.unwrap_or(0.0),
             dew_point_c: r.dew,
+            diffuse_illuminance_lux: r.diffuse_lux,
             missing: r.dni.is_none() || r.dhi.is_none(),
         });
     }
@@ -286,6 +292,24 @@ fn parse_row(path: &Path, line: usize, f: &[&str]) -> Result<Row> {
         dni: irradiance(DNI, "direct normal irradiance")?,
         dhi: irradiance(DHI, "diffuse horizontal irradiance")?,
         dew,
+        diffuse_lux: match f.get(DIFFUSE_ILLUMINANCE).map(|s| s.trim()) {
+            None | Some("") => None,
+            Some(s) => {
+                let v: f64 = s
+                    .parse()
+                    .ok()
+                    .filter(|v: &f64| v.is_finite() && *v >= 0.0)
+                    .ok_or_else(|| {
+                        bad(
+                            DIFFUSE_ILLUMINANCE,
+                            "diffuse horizontal illuminance (lux) must be a finite number ≥ 0 \
+                         (999999 or blank = missing)"
+                                .into(),
+                        )
+                    })?;
+                (v < MISSING_ILLUMINANCE).then_some(v)
+            }
+        },
         stamp: f[..4]
             .iter()
             .map(|s| s.trim())

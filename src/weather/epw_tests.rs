@@ -110,6 +110,10 @@ fn bundled_greensboro_file() {
     assert_eq!(r.dni, f[14].parse::<f64>().unwrap());
     assert_eq!(r.dhi, f[15].parse::<f64>().unwrap());
     assert_eq!(r.dew_point_c, Some(f[7].parse::<f64>().unwrap()));
+    assert_eq!(
+        r.diffuse_illuminance_lux,
+        Some(f[18].parse::<f64>().unwrap())
+    );
     assert!(r.dni > 0.0 && !r.missing);
     // TMY rows come from many years; times still run monotonically through 2021.
     assert!(w.records.windows(2).all(|p| p[1].time > p[0].time));
@@ -256,6 +260,35 @@ fn bad_fields_name_line_and_value() {
         (Some(11), Some("2021,1,1,5")),
         "{shown}"
     );
+}
+
+#[test]
+fn diffuse_illuminance_is_optional_and_checked() {
+    // Field 19: a value, EPW's missing code, blank, absent (a row cut after DHI), NaN.
+    let with = |v: Option<&str>| {
+        let mut l: Vec<String> = one_day().lines().map(str::to_owned).collect();
+        let mut f: Vec<String> = l[9].split(',').map(str::to_owned).collect();
+        match v {
+            Some(v) => f[DIFFUSE_ILLUMINANCE] = v.into(),
+            None => f.truncate(DHI + 1),
+        }
+        l[9] = f.join(",");
+        if v.is_none() {
+            // Every row as short, so the file is consistent.
+            for r in l.iter_mut().skip(8) {
+                let f: Vec<&str> = r.split(',').take(DHI + 1).collect();
+                *r = f.join(",");
+            }
+        }
+        let (_d, p) = temp_file("i.epw", &(l.join("\n") + "\n"));
+        read(&p).map(|w| w.records[1].diffuse_illuminance_lux)
+    };
+    assert_eq!(with(Some("1234.5")).unwrap(), Some(1234.5));
+    assert_eq!(with(Some("999999")).unwrap(), None);
+    assert_eq!(with(Some("")).unwrap(), None);
+    assert_eq!(with(None).unwrap(), None);
+    let (_, _, line, value) = input_parts(with(Some("NaN")).unwrap_err());
+    assert_eq!((line, value.as_deref()), (Some(10), Some("NaN")));
 }
 
 #[test]

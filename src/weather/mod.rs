@@ -82,6 +82,9 @@ pub struct WeatherRecord {
     pub dhi: f64,
     /// Dew-point temperature, °C, when the file gives one.
     pub dew_point_c: Option<f64>,
+    /// Diffuse horizontal illuminance, lux, when the file gives one (EPW field 19; 999999
+    /// or blank is missing): EN 17037's daylight hours are ranked by it.
+    pub diffuse_illuminance_lux: Option<f64>,
     /// True when DNI or DHI was missing in the file (both are then reported as given or 0).
     pub missing: bool,
 }
@@ -256,6 +259,7 @@ mod tests {
             dni,
             dhi,
             dew_point_c: None,
+            diffuse_illuminance_lux: None,
             missing,
         }
     }

@@ -65,6 +65,10 @@ pub fn resample(weather: &Weather, step: u32) -> Result<Weather> {
                         dni: lerp(r.dni, o.dni),
                         dhi: lerp(r.dhi, o.dhi),
                         dew_point_c: r.dew_point_c.zip(o.dew_point_c).map(|(a, b)| lerp(a, b)),
+                        diffuse_illuminance_lux: r
+                            .diffuse_illuminance_lux
+                            .zip(o.diffuse_illuminance_lux)
+                            .map(|(a, b)| lerp(a, b)),
                         missing: r.missing || o.missing,
                     }
                 }

@@ -202,6 +202,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Weather> {
             dni: dni.unwrap_or(0.0),
             dhi: dhi.unwrap_or(0.0),
             dew_point_c: None,
+            diffuse_illuminance_lux: None,
             missing: dni.is_none() || dhi.is_none(),
         });
     }

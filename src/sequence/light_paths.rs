@@ -1,0 +1,64 @@
+//! Light paths of operable aperture groups, as honeybee-radiance simulates them for LEED's
+//! blinds: one path per aperture group, in which every other group's glazing is black and
+//! opaque, and one for the static apertures (glazing in no group), in which every group's
+//! glazing is black. Each path is an ordinary run of its own scene variant, so it has its
+//! own cache records, checkpoints and resume; the sum of the paths is the scene with every
+//! group open, less the light that crosses the glazing of two different groups (honeybee's
+//! simplification too: docs/metrics.md).
+
+use crate::photometry::Rgb;
+use crate::scene::{Material, Scene};
+
+/// Name of the static apertures' path, as honeybee names its folder.
+pub const STATIC_PATH: &str = "__static_apertures__";
+
+/// Name of the material a path gives the glazing it leaves out.
+const BLACK: &str = "__daystep_closed_aperture__";
+
+/// For each triangle, the index (into `scene.imported.aperture_groups`) of the aperture
+/// group its glazing belongs to; `None` for opaque triangles and static glazing.
+pub fn triangle_groups(scene: &Scene) -> Vec<Option<u32>> {
+    let groups = &scene.imported.aperture_groups;
+    scene
+        .triangles
+        .iter()
+        .map(|t| {
+            let m = &scene.materials[t.material as usize];
+            if !m.is_glazing() {
+                return None;
+            }
+            let member = scene.groups.get(t.group as usize)?;
+            groups
+                .iter()
+                .position(|g| {
+                    g.members.iter().any(|x| x == member)
+                        && (g.materials.is_empty() || g.materials.contains(&m.name))
+                })
+                .map(|k| k as u32)
+        })
+        .collect()
+}
+
+/// The scene of one light path: the glazing of every aperture group other than `keep`
+/// (`None`: the static path, every group) made black and opaque. Everything else, the
+/// sensors and the grids included, is unchanged. `None` when no glazing changes: the path
+/// is the scene itself (one group holding all the glazing), and its run is the run's own.
+pub fn path_scene(scene: &Scene, of: &[Option<u32>], keep: Option<u32>) -> Option<Scene> {
+    if of.iter().all(|g| g.is_none() || *g == keep) {
+        return None;
+    }
+    let mut s = scene.clone();
+    let black = s.materials.len() as u32;
+    s.materials.push(Material {
+        name: BLACK.into(),
+        kd: Rgb::ZERO,
+        tf: Rgb::ZERO,
+        ke: Rgb::ZERO,
+    });
+    for (t, g) in s.triangles.iter_mut().zip(of) {
+        if g.is_some() && *g != keep {
+            t.material = black;
+        }
+    }
+    Some(s)
+}
