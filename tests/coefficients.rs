@@ -119,6 +119,7 @@ fn daylight_coefficients_equal_forward_solves_within_their_stated_errors() {
         response_max_bytes: 64 << 20,
         defer_operator: false,
         mesh_solution: false,
+        values_only: false,
     };
     let forward = Engine::new(&scene, &q, &store, &opts);
     let mut dc = Engine::new(&scene, &q, &store, &opts);

@@ -258,6 +258,7 @@ pub fn run_annual(
             response_max_bytes: opts.response_max_bytes,
             defer_operator: opts.daylight_coefficients,
             mesh_solution: false,
+            values_only: opts.series_only,
         },
     );
     if opts.daylight_coefficients && !opts.surfaces {
@@ -347,6 +348,7 @@ pub fn run_annual(
         weather,
         engine: &engine,
         stages: Mutex::new(engine.setup_times().clone()),
+        values_only: opts.series_only,
     };
     let mut done = report.resumed;
     progress(done, total_steps);
@@ -449,9 +451,11 @@ pub fn run_annual(
                 report.compliance = Some(c.report);
             }
         } else if opts.series_only {
-            report
-                .skipped
-                .push("metrics: a light path of --leed (the main run has them)".into());
+            report.skipped.push(
+                "metrics and the error estimate: a light path of --leed (the main run has \
+                 them)"
+                    .into(),
+            );
         } else {
             report
                 .skipped
@@ -533,6 +537,8 @@ struct Ctx<'a> {
     weather: &'a Weather,
     engine: &'a Engine<'a>,
     stages: Mutex<StageTimes>,
+    /// No error estimate ([`EngineOptions::values_only`]): no relative errors to collect.
+    values_only: bool,
 }
 
 impl Ctx<'_> {
@@ -584,11 +590,14 @@ impl Ctx<'_> {
             total: step.sensors.iter().map(|v| v.lux).collect(),
             sun: step.sensors.iter().map(|v| v.lux_sun).collect(),
             surfaces: step.surfaces,
-            rel_err: step
-                .sensors
-                .iter()
-                .filter_map(|v| v.relative_error(10.0).map(|e| e as f32))
-                .collect(),
+            rel_err: if self.values_only {
+                Vec::new()
+            } else {
+                step.sensors
+                    .iter()
+                    .filter_map(|v| v.relative_error(10.0).map(|e| e as f32))
+                    .collect()
+            },
             sweeps: step.report.transport_solve.map_or(0, |t| t.sweeps),
         })
     }

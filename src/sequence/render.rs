@@ -69,6 +69,7 @@ fn mesh_engine<'a>(scene: &'a Scene, quality: &Quality, store: &'a Store) -> Eng
         store,
         &EngineOptions {
             mesh_solution: true,
+            values_only: false,
             ..EngineOptions::default()
         },
     )

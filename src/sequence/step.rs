@@ -58,6 +58,10 @@ pub struct EngineOptions {
     /// Every step's mesh solution is wanted (renders gather from it): the operator is
     /// built even without sensors, and steps solve forward.
     pub mesh_solution: bool,
+    /// Only the values, no error estimate: daylight-coefficient steps skip the coarser
+    /// level (its sources, sun and sky responses), so `lux_err` is not stated. The light
+    /// paths of `annual --leed`, whose run states the error.
+    pub values_only: bool,
 }
 
 /// When a step is: the instant in UTC and the site's local standard time.
@@ -409,9 +413,14 @@ impl<'a> Engine<'a> {
         if let (Some((c, sun_dirs)), false) = (&self.coefficients, detail) {
             // 3–7 by daylight coefficients: sums over the cut, no projection, no solve.
             let (sensors, interp) = times.time("coefficients", || {
-                let coarse = sources_for(sky, self.coarse.quality()).sources;
                 let sun_fine = self.sun_lux(sun_dirs, &sources);
-                let sun_coarse = self.sun_lux(&self.coarse, &coarse);
+                let (coarse, sun_coarse) = if self.opts.values_only {
+                    (Vec::new(), sun_fine.clone())
+                } else {
+                    let coarse = sources_for(sky, self.coarse.quality()).sources;
+                    let sun_coarse = self.sun_lux(&self.coarse, &coarse);
+                    (coarse, sun_coarse)
+                };
                 c.evaluate(
                     &sources,
                     &coarse,
