@@ -252,3 +252,63 @@ fn en17037_on_part_of_a_year_is_refused_before_any_work() {
         "no work before the refusal"
     );
 }
+
+#[test]
+fn the_binary_writes_the_contracts_files_and_runs_no_path_that_is_the_scene_itself() {
+    // The office with its one glazing material as group "south": the south path is the
+    // scene itself (taken from the run's own values), only the static path is run.
+    let d = tempfile::tempdir().unwrap();
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office");
+    for f in ["office.obj", "office.mtl", "weather.epw"] {
+        std::fs::copy(src.join(f), d.path().join(f)).unwrap();
+    }
+    // Every 33rd sensor (5): the files, not the numbers, are under test here.
+    let pts = std::fs::read_to_string(src.join("office.pts")).unwrap();
+    let few: String = pts.lines().step_by(33).map(|l| format!("{l}\n")).collect();
+    std::fs::write(d.path().join("office.pts"), few).unwrap();
+    let toml = std::fs::read_to_string(src.join("scene.toml")).unwrap()
+        + "\n[aperture_groups.south]\nmaterials = [\"glass\"]\n";
+    std::fs::write(d.path().join("scene.toml"), toml).unwrap();
+    let out = d.path().join("out");
+    let p = |f: &str| d.path().join(f).display().to_string();
+    let o = crate::util::daystep(&[
+        "annual",
+        &p("scene.toml"),
+        "--weather",
+        &p("weather.epw"),
+        "--start",
+        "2021-06-21",
+        "--end",
+        "2021-06-21",
+        "--quality",
+        "draft",
+        "--no-cache",
+        "--leed",
+        "--out",
+        &out.display().to_string(),
+    ]);
+    assert!(o.status.success(), "{}", crate::util::stderr(&o));
+    let leed: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("leed.json")).unwrap()).unwrap();
+    for key in [
+        "sda_pct",
+        "ase_pct",
+        "points",
+        "hours_fail_to_comply",
+        "grids",
+    ] {
+        assert!(leed.get(key).is_some(), "leed.json lacks {key}: {leed}");
+    }
+    assert_eq!(leed["grids"][0]["name"], "sensors");
+    let blinds = std::fs::read_to_string(out.join("leed_blinds.csv")).unwrap();
+    assert_eq!(blinds.lines().next(), Some("time,south"));
+    // 21 June: occupied 8:00-18:00, all sun-up: ten rows.
+    assert_eq!(blinds.lines().count(), 1 + 10);
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["compliance"]["paths_from_run"][0], "south");
+    assert!(out
+        .join("paths/__static_apertures__/illuminance.csv")
+        .exists());
+    assert!(!out.join("paths/south").exists());
+}
