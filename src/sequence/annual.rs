@@ -25,7 +25,7 @@ use crate::error::{Error, Result};
 use crate::export::{self, IlluminanceWriter};
 use crate::metrics::MetricParams;
 // Where callers found them before the tables moved to `merge`.
-pub use super::merge::{merge, write_metrics};
+pub use super::merge::{merge, write_metrics, write_report_page};
 use crate::radiosity::TransportState;
 use crate::scene::Scene;
 use crate::site::solar_position::solar_position;
@@ -406,7 +406,9 @@ pub fn run_annual(
         }
         if n == 1 {
             let tm = Instant::now();
-            write_metrics(out, weather.interval_minutes, &opts.metrics)?;
+            let per = write_metrics(out, weather.interval_minutes, &opts.metrics)?;
+            let title = format!("daystep annual: {}, {}", report.scene, report.weather);
+            write_report_page(out, scene, &per, &opts.metrics, title)?;
             if opts.ill {
                 let (times, rows) = export::read_illuminance_csv(&out.join("illuminance.csv"))?;
                 let times = parse_times(&times)?;
