@@ -239,3 +239,91 @@ fn points_stay_readable_from_ten_to_ten_thousand() {
         }
     }
 }
+
+#[test]
+fn leed_en17037_tables_and_blind_heat_map() {
+    use crate::metrics::en17037::{en17037, En17037Grid};
+    use crate::metrics::leed::{leed_option_one, LeedGrid, LeedPeriod, LightPath, Shade};
+    let s = load("scenes/office/scene.toml");
+    let n = s.sensors.len();
+    // Three hourly steps on 21 June; at 11:30 every sensor gets 2000 lx of direct sun
+    // (100 % over-lit > 2 %): the group is shaded then, open at 10:30 and 12:30 (no sun).
+    let direct: Vec<f32> = (0..3 * n)
+        .map(|i| if i / n == 1 { 2000.0 } else { 0.0 })
+        .collect();
+    let total: Vec<f32> = direct.iter().map(|d| d + 400.0).collect();
+    let occupied = [true; 3];
+    let g = LeedGrid {
+        name: "all sensors",
+        sensors: n,
+        areas: None,
+        paths: vec![LightPath {
+            name: "south",
+            total: &total,
+            direct: &direct,
+            shade: Shade::Transmittance(0.05),
+        }],
+    };
+    let leed = leed_option_one(
+        &[g],
+        &LeedPeriod {
+            occupied: &occupied,
+            total_occupied_steps: 3,
+            hours_per_step: 1.0,
+        },
+    )
+    .unwrap();
+    assert_eq!(leed.blinds.shaded, [vec![false, true, false]]);
+    let en = en17037(
+        &[En17037Grid {
+            name: "all sensors",
+            sensors: n,
+            areas: None,
+            total: &total,
+        }],
+        &occupied,
+        crate::metrics::en17037::DAYLIGHT_HOURS,
+    )
+    .unwrap();
+    let times: Vec<_> = [10, 11, 12]
+        .iter()
+        .map(|h| {
+            chrono::NaiveDate::from_ymd_opt(2021, 6, 21)
+                .unwrap()
+                .and_hms_opt(*h, 30, 0)
+                .unwrap()
+        })
+        .collect();
+    let m = metrics(n, |_| 50.0, |_| 0.0);
+    let html = report_html(&ReportInputs {
+        title: "leed".into(),
+        scene: &s,
+        metrics: &m,
+        params: &MetricParams::default(),
+        leed: Some(&leed),
+        leed_times: &times,
+        en17037: Some(&en),
+    })
+    .unwrap();
+    // LEED: every sensor has 400 lx or more at every step: DA 100 %, sDA 100 %; ASE 1 h.
+    let leed_part = &html[html.find("<table id=\"leed\"").unwrap()..];
+    let leed_part = &leed_part[..leed_part.find("</table>").unwrap()];
+    assert!(leed_part.contains("<tr data-grid=\"all sensors\"><td class=\"l\">all sensors</td><td>100.0</td>"));
+    assert!(html.contains(&format!("<b>Points: {}</b>", leed.points)));
+    // EN 17037: three rows over all grids and three for the grid; 3 of 4380 daylight hours
+    // meet nothing for half the time: every level fails both ways.
+    let en_part = &html[html.find("<table id=\"en17037\"").unwrap()..];
+    let en_part = &en_part[..en_part.find("</table>").unwrap()];
+    assert_eq!(en_part.matches("<tr").count(), 1 + 6);
+    assert_eq!(en_part.matches("class=\"fail\"").count(), 12);
+    // Heat map: one day column, hours 10 and 11 and 12 filled, 11 shaded.
+    let svg = &html[html.find("<svg class=\"blinds\" data-group=\"south\"").unwrap()..];
+    let svg = &svg[..svg.find("</svg>").unwrap()];
+    let fills = attrs(svg, "<rect", "fill");
+    assert_eq!(fills, [OPEN, SHADED, OPEN]);
+    let ys: Vec<f64> = attrs(svg, "<rect", "y")
+        .iter()
+        .map(|y| y.parse().unwrap())
+        .collect();
+    assert!(ys.windows(2).all(|w| w[1] > w[0]), "hours run down");
+}
