@@ -17,11 +17,15 @@ pub fn run(a: MergeArgs) -> Result<()> {
     let per = crate::sequence::annual::merge(&a.parts, &a.out, a.step, &params)?;
     match report_scene(&a)? {
         Some(scene) if scene.sensors.len() == per.len() => {
-            let title = format!(
-                "daystep merge: {}, {} shards",
-                scene.path.display(),
-                a.parts.len()
-            );
+            // The title one run gives, so that the page is the one run's page.
+            let title = match shard_report(&a.parts[0]) {
+                Some((s, Some(w))) => format!("daystep annual: {s}, {w}"),
+                _ => format!(
+                    "daystep merge: {}, {} shards",
+                    scene.path.display(),
+                    a.parts.len()
+                ),
+            };
             crate::sequence::annual::write_report_page(&a.out, &scene, &per, &params, title)?;
         }
         Some(scene) => note!(
@@ -46,7 +50,7 @@ pub fn run(a: MergeArgs) -> Result<()> {
 fn report_scene(a: &MergeArgs) -> Result<Option<crate::scene::Scene>> {
     let path = match &a.scene {
         Some(p) => p.clone(),
-        None => match named_scene(&a.parts[0]) {
+        None => match shard_report(&a.parts[0]).map(|r| PathBuf::from(r.0)) {
             Some(p) if p.exists() => p,
             _ => return Ok(None),
         },
@@ -69,9 +73,13 @@ fn report_scene(a: &MergeArgs) -> Result<Option<crate::scene::Scene>> {
     Ok(Some(scene))
 }
 
-/// The `scene` a shard folder's `report.json` names.
-fn named_scene(dir: &Path) -> Option<PathBuf> {
+/// The `scene` and `weather` a shard folder's `report.json` names.
+fn shard_report(dir: &Path) -> Option<(String, Option<String>)> {
     let text = std::fs::read_to_string(dir.join("report.json")).ok()?;
     let v: serde_json::Value = serde_json::from_str(&text).ok()?;
-    v.get("scene")?.as_str().map(PathBuf::from)
+    let s = v.get("scene")?.as_str()?.to_owned();
+    Some((
+        s,
+        v.get("weather").and_then(|w| w.as_str()).map(str::to_owned),
+    ))
 }

@@ -26,8 +26,16 @@ pub const LEVEL_TOLERANCE_M: f64 = 0.05;
 /// Without a room, floor faces must lie within the sensors' footprint grown by this share
 /// of its larger side (and by at least 1 m) on every side.
 pub const FOOTPRINT_MARGIN: f64 = 0.25;
-/// Largest side of a map's drawing area, px.
+/// Largest side of a map's drawing area up to [`MAP_PX_SENSORS`] sensors, px.
 pub const MAP_PX: f64 = 300.0;
+/// Above this many sensors a map grows with √n, up to twice [`MAP_PX`], so that a point
+/// stays ≥ 2 px wide (10 000 sensors on a square grid: 600 px, 5.4 px points).
+pub const MAP_PX_SENSORS: usize = 2500;
+
+/// Largest side of the drawing area of a map of `n` points, px.
+pub fn map_px(n: usize) -> f64 {
+    (MAP_PX * (n as f64 / MAP_PX_SENSORS as f64).sqrt()).clamp(MAP_PX, 2.0 * MAP_PX)
+}
 /// Colour of a floor face's fill.
 const FLOOR_FILL: &str = "#ececec";
 /// Colour of the outline.
@@ -252,7 +260,8 @@ pub fn map_svg(
     lo -= pad;
     hi += pad;
     let ext = (hi - lo).max(DVec2::splat(1e-6));
-    let px = MAP_PX / ext.max_element();
+    let side_px = map_px(pts.len());
+    let px = side_px / ext.max_element();
     let (w, h) = (ext.x * px, ext.y * px);
     let (m, top) = (10.0, 28.0);
     let legend_y = top + h + 34.0;
@@ -335,14 +344,14 @@ pub fn map_svg(
         );
     }
     s.push_str("</g>");
-    north_and_scale(&mut s, total_w, top, h, px);
+    north_and_scale(&mut s, total_w, top, h, px, side_px);
     legend(&mut s, scale, m, legend_y);
     s.push_str("</svg>");
     s
 }
 
 /// A north arrow (scene y is north) at the top right and a scale bar below the plan.
-fn north_and_scale(s: &mut String, total_w: f64, top: f64, h: f64, px: f64) {
+fn north_and_scale(s: &mut String, total_w: f64, top: f64, h: f64, px: f64, side_px: f64) {
     let ax = total_w - 16.0;
     let _ = write!(
         s,
@@ -352,9 +361,9 @@ fn north_and_scale(s: &mut String, total_w: f64, top: f64, h: f64, px: f64) {
         16
     );
     // A bar of 1, 2, 2.5 or 5 × 10^k m, about a quarter of the plan's width or less.
-    let target = 0.25 * MAP_PX / px;
+    let target = 0.25 * side_px / px;
     let len = nice_ceil(target, 1e-3);
-    let len = if len * px > 0.4 * MAP_PX {
+    let len = if len * px > 0.4 * side_px {
         len / 2.0
     } else {
         len
