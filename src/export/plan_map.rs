@@ -116,10 +116,13 @@ fn bounds(p: &[DVec2]) -> (DVec2, DVec2) {
     )
 }
 
+/// An edge's ends in millimetres, the smaller first.
+type EdgeKey = ((i64, i64), (i64, i64));
+
 /// The edges only one of `tris` has (ends matched to the millimetre): the outline.
 pub fn boundary_edges(tris: &[PlanTriangle]) -> Vec<[DVec2; 2]> {
     let key = |p: DVec2| ((p.x * 1000.0).round() as i64, (p.y * 1000.0).round() as i64);
-    let mut count: HashMap<((i64, i64), (i64, i64)), (usize, [DVec2; 2])> = HashMap::new();
+    let mut count: HashMap<EdgeKey, (usize, [DVec2; 2])> = HashMap::new();
     let mut order = Vec::new();
     for t in tris {
         for i in 0..3 {

@@ -13,8 +13,8 @@
 //!   the first day of the run); `daystep merge` interleaves the shards' rows and computes
 //!   the metrics.
 //! * **Outputs.** `illuminance.csv` (total: direct + interreflected), `direct_sun.csv`
-//!   (sun only, no interreflection: what ASE counts), `metrics.csv` and `summary.json`
-//!   (unsharded runs and merges), `report.json`.
+//!   (sun only, no interreflection: what ASE counts), `metrics.csv`, `summary.json` and
+//!   `report.html` (unsharded runs and merges), `report.json`.
 
 use super::config::{Quality, SkySpec};
 use super::merge::parse_times;
@@ -424,7 +424,7 @@ pub fn run_annual(
         } else {
             report
                 .skipped
-                .push("metrics: a shard; `daystep merge` computes them".into());
+                .push("metrics, report.html: a shard; `daystep merge` writes them".into());
         }
         if !opts.ill {
             report
