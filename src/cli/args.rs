@@ -246,6 +246,10 @@ pub struct MergeArgs {
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
+    /// The runs' scene, for report.html's plan maps (default: the scene the first
+    /// shard's report.json names, when that file exists).
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
     /// Timestep of the runs, minutes (the weather file's interval).
     #[arg(long, default_value_t = 60, value_parser = whole(1u32, MAX_STEP_MINUTES, "minutes"))]
     pub step: u32,

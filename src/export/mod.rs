@@ -12,7 +12,9 @@
 
 pub mod gltf;
 pub mod grids;
+pub mod plan_map;
 pub mod plot;
+pub mod report_page;
 pub mod viewer;
 
 use crate::error::{Error, Result};

@@ -13,8 +13,8 @@
 //!   the first day of the run); `daystep merge` interleaves the shards' rows and computes
 //!   the metrics.
 //! * **Outputs.** `illuminance.csv` (total: direct + interreflected), `direct_sun.csv`
-//!   (sun only, no interreflection: what ASE counts), `metrics.csv` and `summary.json`
-//!   (unsharded runs and merges), `report.json`.
+//!   (sun only, no interreflection: what ASE counts), `metrics.csv`, `summary.json` and
+//!   `report.html` (unsharded runs and merges), `report.json`.
 
 use super::config::{Quality, SkySpec};
 use super::merge::parse_times;
@@ -25,7 +25,7 @@ use crate::error::{Error, Result};
 use crate::export::{self, IlluminanceWriter};
 use crate::metrics::MetricParams;
 // Where callers found them before the tables moved to `merge`.
-pub use super::merge::{merge, write_metrics};
+pub use super::merge::{merge, write_metrics, write_report_page};
 use crate::radiosity::TransportState;
 use crate::scene::Scene;
 use crate::site::solar_position::solar_position;
@@ -420,9 +420,10 @@ pub fn run_annual(
         if let Some(w) = w_surf.take() {
             w.finish()?;
         }
+        let mut compliance: Option<super::compliance::Compliance> = None;
         if n == 1 && !opts.series_only {
             let tm = Instant::now();
-            write_metrics(out, weather.interval_minutes, &opts.metrics)?;
+            let per = write_metrics(out, weather.interval_minutes, &opts.metrics)?;
             if opts.ill {
                 let (times, rows) = export::read_illuminance_csv(&out.join("illuminance.csv"))?;
                 let times = parse_times(&times)?;
@@ -448,7 +449,24 @@ pub fn run_annual(
                 };
                 let c = super::compliance::compliance(&run)?;
                 report.interrupted |= c.report.interrupted;
-                report.compliance = Some(c.report);
+                report.compliance = Some(c.report.clone());
+                compliance = Some(c);
+            }
+            if !report.interrupted {
+                // After the compliance numbers: the page shows them.
+                let c = compliance.as_ref();
+                export::report_page::write_report_html(
+                    &out.join("report.html"),
+                    &export::report_page::ReportInputs {
+                        title: format!("daystep annual: {}, {}", report.scene, report.weather),
+                        scene,
+                        metrics: &per,
+                        params: &opts.metrics,
+                        leed: c.and_then(|c| c.leed.as_ref()),
+                        leed_times: c.map_or(&[], |c| &c.leed_times),
+                        en17037: c.and_then(|c| c.en17037.as_ref()),
+                    },
+                )?;
             }
         } else if opts.series_only {
             report.skipped.push(
@@ -459,7 +477,7 @@ pub fn run_annual(
         } else {
             report
                 .skipped
-                .push("metrics: a shard; `daystep merge` computes them".into());
+                .push("metrics, report.html: a shard; `daystep merge` writes them".into());
             if opts.leed || opts.en17037 {
                 report.skipped.push(
                     "--leed/--en17037: a shard; run them unsharded (the cache makes it cheap)"

@@ -21,9 +21,15 @@ pub(crate) fn parse_times(times: &[String]) -> Result<Vec<NaiveDateTime>> {
 /// Computes `metrics.csv` and `summary.json` in `out` from its `illuminance.csv` and
 /// `direct_sun.csv` (a finished run or a merge).
 ///
+/// Returns the per-sensor metrics (sensor order), which `report.html` maps.
+///
 /// # Errors
 /// Missing or malformed input files; files that cannot be written.
-pub fn write_metrics(out: &Path, step_minutes: u32, params: &MetricParams) -> Result<()> {
+pub fn write_metrics(
+    out: &Path,
+    step_minutes: u32,
+    params: &MetricParams,
+) -> Result<Vec<metrics::SensorMetrics>> {
     params.validate()?;
     let (times, total) = export::read_illuminance_csv(&out.join("illuminance.csv"))?;
     let (_, sun) = export::read_illuminance_csv(&out.join("direct_sun.csv"))?;
@@ -74,11 +80,38 @@ pub fn write_metrics(out: &Path, step_minutes: u32, params: &MetricParams) -> Re
         doc["grids"] = by_grid.into();
         doc["rooms"] = by_room.into();
     }
-    export::write_json(&out.join("summary.json"), &doc)
+    export::write_json(&out.join("summary.json"), &doc)?;
+    Ok(per)
+}
+
+/// Writes `out/report.html` ([`export::report_page`]) for the run of `scene` with the
+/// per-sensor `metrics` of [`write_metrics`]; no LEED or EN 17037 tables.
+///
+/// # Errors
+/// The file cannot be written.
+pub fn write_report_page(
+    out: &Path,
+    scene: &crate::scene::Scene,
+    metrics: &[metrics::SensorMetrics],
+    params: &MetricParams,
+    title: String,
+) -> Result<()> {
+    export::report_page::write_report_html(
+        &out.join("report.html"),
+        &export::report_page::ReportInputs {
+            title,
+            scene,
+            metrics,
+            params,
+            leed: None,
+            leed_times: &[],
+            en17037: None,
+        },
+    )
 }
 
 /// Merges shard folders into `out` (the same files a single run writes) and computes the
-/// metrics.
+/// metrics, which it returns (per sensor) for `report.html`.
 ///
 /// # Errors
 /// Shards that do not fit together (headers, duplicate or missing times), I/O.
@@ -87,7 +120,7 @@ pub fn merge(
     out: &Path,
     step_minutes: u32,
     params: &MetricParams,
-) -> Result<()> {
+) -> Result<Vec<metrics::SensorMetrics>> {
     check_shards(parts)?;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     for f in ["illuminance.csv", "direct_sun.csv", "surfaces.csv"] {
