@@ -12,12 +12,14 @@
 //! - attributes `POSITION`, `NORMAL`, `COLOR_0` (linear radiance ÷ `radiance_scale`, in
 //!   [0, 1]), `_ILLUMINANCE` (lux) and `_LUMINANCE` (cd/m²) of frame 0;
 //! - `asset.extras.daystep`: `version`, `radiance_scale` (W·sr⁻¹·m⁻² per COLOR_0 unit),
-//!   `frames` (label and, per primitive, the accessors of COLOR_0, _ILLUMINANCE and
-//!   _LUMINANCE), `sensors` (positions and per-frame lux accessors, or null);
+//!   `frames` (label, `sun_altitude_deg` when the label is a local time and the site is
+//!   known, and per primitive the accessors of COLOR_0, _ILLUMINANCE and _LUMINANCE),
+//!   `sensors` (positions and per-frame lux accessors, or null);
 //! - materials: base colour = Kd; glazing is blended with alpha 0.3.
 
 use crate::error::{Error, Result};
 use crate::photometry::{grey, lux, Rgb, EFFICACY_LM_PER_W};
+use crate::site::Site;
 use glam::DVec3;
 use gltf::json;
 use json::validation::{Checked, USize64};
@@ -42,6 +44,8 @@ pub struct SolutionGeometry {
     primitives: Vec<Primitive>,
     materials: Vec<GltfMaterial>,
     origin: DVec3,
+    /// The site, so each frame whose label is a local time gets the sun's altitude.
+    site: Option<Site>,
 }
 
 #[derive(Clone, Debug)]
@@ -120,7 +124,28 @@ impl SolutionGeometry {
             primitives: prims,
             materials,
             origin,
+            site: None,
         }
+    }
+
+    /// The same geometry at `site`: each frame labelled with a local standard time
+    /// (`YYYY-MM-DDTHH:MM[:SS]`) then carries the sun's apparent altitude
+    /// (`sun_altitude_deg`, degrees), from which the viewer finds the frame nearest solar
+    /// noon.
+    pub fn with_site(mut self, site: Site) -> SolutionGeometry {
+        self.site = Some(site);
+        self
+    }
+
+    /// The sun's apparent altitude (degrees) at the local standard time `label`, when the
+    /// site is known and the label is such a time.
+    fn sun_altitude_deg(&self, label: &str) -> Option<f64> {
+        let site = self.site.as_ref()?;
+        let local = ["%Y-%m-%dT%H:%M:%S", "%Y-%m-%dT%H:%M"]
+            .iter()
+            .find_map(|f| chrono::NaiveDateTime::parse_from_str(label, f).ok())?;
+        let at = crate::site::local_to_utc(local, site.utc_offset_h);
+        Some(crate::site::solar_position::solar_position(at, site).altitude_deg())
     }
 
     /// Vertices over all primitives.
@@ -363,7 +388,12 @@ impl SolutionGeometry {
         let frames_json: Vec<json::Value> = frames
             .iter()
             .zip(frame_acc)
-            .map(|(f, prims)| serde_json::json!({ "label": f.label, "primitives": prims }))
+            .map(|(f, prims)| match self.sun_altitude_deg(&f.label) {
+                Some(alt) => serde_json::json!({
+                    "label": f.label, "sun_altitude_deg": alt, "primitives": prims
+                }),
+                None => serde_json::json!({ "label": f.label, "primitives": prims }),
+            })
             .collect();
         let extras = serde_json::json!({ "daystep": {
             "version": 1,
@@ -430,7 +460,7 @@ pub fn geometry_of(
             glazing: m.is_glazing(),
         })
         .collect();
-    SolutionGeometry::new(&rows, materials, scene.origin)
+    SolutionGeometry::new(&rows, materials, scene.origin).with_site(scene.site)
 }
 
 /// One frame of `op`'s solution `state`: each row's radiance B/π + its emission, and its
