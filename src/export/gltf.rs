@@ -486,3 +486,7 @@ pub fn frame_of(
         sensor_lux,
     }
 }
+
+#[cfg(test)]
+#[path = "gltf_tests.rs"]
+mod tests;

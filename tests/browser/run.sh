@@ -23,10 +23,12 @@ done
 mkdir -p "$out"
 
 if [[ ! -x /usr/bin/chromium ]]; then
-    sudo_=""; [[ $(id -u) -ne 0 ]] && sudo_="sudo"
+    sudo_=()
+    if [[ $(id -u) -ne 0 ]]; then sudo_=(sudo); fi
     export DEBIAN_FRONTEND=noninteractive
-    $sudo_ apt-get install -y -qq --no-install-recommends chromium >/dev/null ||
-        { $sudo_ apt-get update -qq && $sudo_ apt-get install -y -qq --no-install-recommends chromium >/dev/null; }
+    "${sudo_[@]}" apt-get install -y -qq --no-install-recommends chromium >/dev/null ||
+        { "${sudo_[@]}" apt-get update -qq &&
+            "${sudo_[@]}" apt-get install -y -qq --no-install-recommends chromium >/dev/null; }
 fi
 if [[ ! -d "$here/node_modules/playwright-core" ]]; then
     (cd "$here" && npm ci --no-audit --no-fund --silent)

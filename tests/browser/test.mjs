@@ -170,6 +170,35 @@ check((room.x1 - room.x0) * (room.y1 - room.y0) >= 0.2 * view0.w * view0.h, `the
 const m0 = meanLuma(view0, room) / 255;
 check(m0 >= 0.15 && m0 <= 0.85, `first view, room region ${roomText}: mean ${(100 * m0).toFixed(1)} % of full scale (15..85 %), exposure ${st0.exposureEv.toFixed(2)} EV`);
 
+// ---- cracks: the ground seen from 30 m up, smooth but for the building, where a crack
+// between elements lets through what lies behind (the background, or the ground's
+// underside). A crack pixel is darker than both its neighbours across the line (left and
+// right, or above and below) by over 16 levels of luma while those two agree within 6.
+// With and without the edge pass.
+function cracks(img, r) {
+  let n = 0;
+  for (let y = r.y0; y < r.y1; y++) for (let x = r.x0; x < r.x1; x++) {
+    const c = luma(rgbAt(img, x, y));
+    for (const [a, b] of [[rgbAt(img, x - 1, y), rgbAt(img, x + 1, y)], [rgbAt(img, x, y - 1), rgbAt(img, x, y + 1)]]) {
+      const la = luma(a), lb = luma(b);
+      if (Math.abs(la - lb) <= 6 && la - c > 16 && lb - c > 16) { n++; break; }
+    }
+  }
+  return n;
+}
+await page.locator('#sensors').uncheck();
+await page.evaluate(() => window.__setView([3, 30, 6], [3, 0, -4]));
+const withEdges = await shot(page, 'ground_edges_on.png');
+await page.evaluate(() => window.__setEdges(false));
+const noEdges = await shot(page, 'ground_edges_off.png');
+await page.evaluate(() => window.__setEdges(true));
+await page.locator('#sensors').check();
+await page.click('#inside');
+// Open ground west of the building, clear of its walls and of the block's shadow.
+const open = { x0: 40, y0: 60, x1: 320, y1: 370 };
+const cOn = cracks(withEdges, open), cOff = cracks(noEdges, open);
+check(cOff >= 10 && cOn <= cOff / 2, `cracks: single dark pixels on open ground seen from 30 m up (x ${open.x0}..${open.x1}, y ${open.y0}..${open.y1}): ${cOn} with the edge pass, ${cOff} without`);
+
 // ---- falsecolor illuminance: legend bands in the room, and the dots' colours ----
 await page.selectOption('#mode', '2');
 const legendPng = await page.locator('#legend').screenshot();
