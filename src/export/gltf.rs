@@ -8,7 +8,9 @@
 //!   `asset.extras.daystep.origin`, in full precision);
 //! - vertices are the mesh elements' corners welded on each plane of each material, each
 //!   carrying the area-weighted mean of the elements around it (so flat surfaces shade
-//!   smoothly and share their vertices);
+//!   smoothly and share their vertices); a triangle with another element's vertex on one of
+//!   its edges (a T-junction) is split into a fan around its centroid through that vertex
+//!   (`tjunction`), so no edge leaves a crack where neighbours meet;
 //! - attributes `POSITION`, `NORMAL`, `COLOR_0` (linear radiance ÷ `radiance_scale`, in
 //!   [0, 1]), `_ILLUMINANCE` (lux) and `_LUMINANCE` (cd/m²) of frame 0;
 //! - `asset.extras.daystep`: `version`, `radiance_scale` (W·sr⁻¹·m⁻² per COLOR_0 unit),
@@ -87,6 +89,9 @@ impl SolutionGeometry {
         let mut prims: Vec<Primitive> = Vec::new();
         let mut prim_of: HashMap<usize, usize> = HashMap::new();
         let mut welded: HashMap<(usize, [i64; 4], [i64; 3]), u32> = HashMap::new();
+        // Per primitive, each vertex's plane (ids in order of first appearance).
+        let mut planes: Vec<Vec<u32>> = Vec::new();
+        let mut plane_id: HashMap<[i64; 4], u32> = HashMap::new();
         let q = |x: f64, s: f64| (x * s).round() as i64;
         for (r, (v, n, area, m)) in rows.iter().enumerate() {
             let m = *m as usize;
@@ -98,11 +103,14 @@ impl SolutionGeometry {
                     indices: Vec::new(),
                     weights: Vec::new(),
                 });
+                planes.push(Vec::new());
                 prims.len() - 1
             });
             // Vertices are shared within one plane of one material only, so edges between
             // planes stay sharp.
             let plane = [q(n.x, 1e4), q(n.y, 1e4), q(n.z, 1e4), q(n.dot(v[0]), 1e3)];
+            let next_id = plane_id.len() as u32;
+            let id = *plane_id.entry(plane).or_insert(next_id);
             for corner in v {
                 let key = (
                     pi,
@@ -111,6 +119,7 @@ impl SolutionGeometry {
                 );
                 let p = &mut prims[pi];
                 let idx = *welded.entry(key).or_insert_with(|| {
+                    planes[pi].push(id);
                     p.positions.push(to_gltf(*corner));
                     p.normals.push(to_gltf(*n));
                     p.weights.push(Vec::new());
@@ -119,6 +128,30 @@ impl SolutionGeometry {
                 p.weights[idx as usize].push((r as u32, *area));
                 p.indices.push(idx);
             }
+        }
+        for (p, plane) in prims.iter_mut().zip(&planes) {
+            let (indices, centroids) =
+                super::tjunction::split_t_junctions(&p.positions, plane, &p.indices);
+            for corners in centroids {
+                let mut at = [0.0f32; 3];
+                let mut weights = Vec::new();
+                for &c in &corners {
+                    for k in 0..3 {
+                        at[k] += p.positions[c as usize][k] / 3.0;
+                    }
+                    // Each corner's weights scaled to sum 1/3, so the new vertex carries
+                    // the mean of the corners' values: what the triangle showed there.
+                    let sum: f64 = p.weights[c as usize].iter().map(|w| w.1).sum();
+                    if sum > 0.0 {
+                        let own = p.weights[c as usize].iter();
+                        weights.extend(own.map(|&(r, w)| (r, w / sum / 3.0)));
+                    }
+                }
+                p.normals.push(p.normals[corners[0] as usize]);
+                p.positions.push(at);
+                p.weights.push(weights);
+            }
+            p.indices = indices;
         }
         SolutionGeometry {
             primitives: prims,

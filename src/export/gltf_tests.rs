@@ -66,3 +66,90 @@ fn frames_at_local_times_carry_the_suns_altitude() {
     let bare = frames_json(&one_triangle().encode(&frames, &[]).unwrap());
     assert!(bare.iter().all(|f| f.get("sun_altitude_deg").is_none()));
 }
+
+/// Whether any vertex lies strictly inside an edge of a triangle of `p` (within 10 µm of
+/// the segment, over 10 µm from both ends): a T-junction. Brute force, independent of the
+/// splitter's grid.
+fn t_junctions(p: &Primitive) -> usize {
+    let at = |i: u32| {
+        let v = p.positions[i as usize];
+        DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)
+    };
+    let mut n = 0;
+    for t in p.indices.chunks_exact(3) {
+        for k in 0..3 {
+            let (a, b) = (at(t[k]), at(t[(k + 1) % 3]));
+            for v in 0..p.positions.len() as u32 {
+                let q = at(v);
+                let s = (q - a).dot(b - a) / (b - a).length_squared();
+                let off = (a + (b - a) * s).distance(q);
+                if off < 1e-5 && q.distance(a) > 1e-5 && q.distance(b) > 1e-5 && s > 0.0 && s < 1.0
+                {
+                    n += 1;
+                }
+            }
+        }
+    }
+    n
+}
+
+fn area(p: &Primitive) -> f64 {
+    let at = |i: u32| {
+        let v = p.positions[i as usize];
+        DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)
+    };
+    p.indices
+        .chunks_exact(3)
+        .map(|t| (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0])).length() / 2.0)
+        .sum()
+}
+
+/// A large triangle beside two small ones whose shared corner (1, 1) lies on its long edge:
+/// the large one is split through that corner, no T-junction is left, the area is kept,
+/// and the new centre vertex carries the mean of the large triangle's corners.
+#[test]
+fn a_vertex_on_a_neighbours_edge_splits_that_edge() {
+    let p = |x: f64, y: f64| DVec3::new(x, y, 0.0);
+    let rows = [
+        ([p(0.0, 0.0), p(2.0, 0.0), p(0.0, 2.0)], DVec3::Z, 2.0, 0),
+        ([p(2.0, 0.0), p(2.0, 2.0), p(1.0, 1.0)], DVec3::Z, 1.0, 0),
+        ([p(1.0, 1.0), p(2.0, 2.0), p(0.0, 2.0)], DVec3::Z, 1.0, 0),
+    ];
+    let material = GltfMaterial {
+        name: "floor".into(),
+        kd: DVec3::splat(0.5),
+        glazing: false,
+    };
+    let g = SolutionGeometry::new(&rows, vec![material], DVec3::ZERO);
+    let prim = &g.primitives[0];
+    assert_eq!(t_junctions(prim), 0);
+    assert!((area(prim) - 4.0).abs() < 1e-9, "{}", area(prim));
+    // 5 welded corners and the split triangle's centre; the large triangle becomes a fan
+    // of 4 (its 3 corners and the one on its edge), the small ones stay: 6 triangles.
+    assert_eq!(prim.positions.len(), 6);
+    assert_eq!(prim.indices.len(), 3 * 6);
+    // The mesh without the splitting has one T-junction: the check can fail.
+    let mut unsplit = prim.clone();
+    unsplit.indices = rows
+        .iter()
+        .flat_map(|r| r.0)
+        .map(|c| {
+            let q = to_gltf(c);
+            prim.positions.iter().position(|v| *v == q).unwrap() as u32
+        })
+        .collect();
+    assert_eq!(t_junctions(&unsplit), 1);
+    let per_row = [DVec3::splat(3.0), DVec3::splat(9.0), DVec3::splat(6.0)];
+    let values = g.vertex_values(prim, &per_row);
+    let corner = |x: f64, y: f64| {
+        let q = to_gltf(p(x, y));
+        values[prim.positions.iter().position(|v| *v == q).unwrap()]
+    };
+    let mean = (corner(0.0, 0.0) + corner(2.0, 0.0) + corner(0.0, 2.0)) / 3.0;
+    assert!(
+        (values[5] - mean).length() < 1e-12,
+        "{} vs {}",
+        values[5],
+        mean
+    );
+}

@@ -13,6 +13,7 @@
 pub mod gltf;
 pub mod grids;
 pub mod plot;
+mod tjunction;
 pub mod viewer;
 
 use crate::error::{Error, Result};

@@ -42,6 +42,8 @@ glb="$out/office-$day.glb"
 "$daystep" annual scenes/office/scene.toml --weather scenes/office/weather.epw \
     --start "$day" --end "$day" --gltf-day "$day" --gltf "$glb" --out "$out/annual" >/dev/null
 
+# A stale url.txt would be read before the new server's shell truncates it.
+rm -f "$out/url.txt"
 "$daystep" view "$glb" --port 0 >"$out/url.txt" 2>"$out/server.log" &
 server=$!
 trap 'kill "$server" 2>/dev/null || true' EXIT
