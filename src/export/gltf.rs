@@ -136,8 +136,8 @@ impl SolutionGeometry {
                 let mut at = [0.0f32; 3];
                 let mut weights = Vec::new();
                 for &c in &corners {
-                    for k in 0..3 {
-                        at[k] += p.positions[c as usize][k] / 3.0;
+                    for (x, v) in at.iter_mut().zip(p.positions[c as usize]) {
+                        *x += v / 3.0;
                     }
                     // Each corner's weights scaled to sum 1/3, so the new vertex carries
                     // the mean of the corners' values: what the triangle showed there.

@@ -12,6 +12,9 @@ use std::collections::HashMap;
 /// 5× the 10 µm grid vertices are welded on, well above `f32` rounding at hundreds of metres.
 const TOLERANCE_M: f64 = 5e-5;
 
+/// A grid cell's integer coordinates.
+type Cell = (i64, i64, i64);
+
 /// The triangles `indices` (triples into `positions`, glTF frame, m) with every T-junction
 /// split, vertices counting only against triangles of their own plane (`plane`, an id per
 /// vertex). Returns the new triangle indices, where index `positions.len() + k` is the k-th
@@ -35,14 +38,14 @@ pub(crate) fn split_t_junctions(
         .sum::<f64>()
         / edges;
     let cell = mean_edge.max(1e-3);
-    let key = |p: DVec3| {
+    let key = |p: DVec3| -> Cell {
         (
             (p.x / cell).floor() as i64,
             (p.y / cell).floor() as i64,
             (p.z / cell).floor() as i64,
         )
     };
-    let mut grid: HashMap<(u32, (i64, i64, i64)), Vec<u32>> = HashMap::new();
+    let mut grid: HashMap<(u32, Cell), Vec<u32>> = HashMap::new();
     for i in 0..positions.len() as u32 {
         grid.entry((plane[i as usize], key(at(i))))
             .or_default()
