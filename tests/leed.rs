@@ -299,7 +299,7 @@ fn the_binary_writes_the_contracts_files_and_runs_no_path_that_is_the_scene_itse
     ] {
         assert!(leed.get(key).is_some(), "leed.json lacks {key}: {leed}");
     }
-    assert_eq!(leed["grids"][0]["name"], "sensors");
+    assert_eq!(leed["grids"][0]["name"], "all sensors");
     let blinds = std::fs::read_to_string(out.join("leed_blinds.csv")).unwrap();
     assert_eq!(blinds.lines().next(), Some("time,south"));
     // 21 June: occupied 8:00-18:00, all sun-up: ten rows.

@@ -8,16 +8,20 @@
 //!   `asset.extras.daystep.origin`, in full precision);
 //! - vertices are the mesh elements' corners welded on each plane of each material, each
 //!   carrying the area-weighted mean of the elements around it (so flat surfaces shade
-//!   smoothly and share their vertices);
+//!   smoothly and share their vertices); a triangle with another element's vertex on one of
+//!   its edges (a T-junction) is split into a fan around its centroid through that vertex
+//!   (`tjunction`), so no edge leaves a crack where neighbours meet;
 //! - attributes `POSITION`, `NORMAL`, `COLOR_0` (linear radiance ÷ `radiance_scale`, in
 //!   [0, 1]), `_ILLUMINANCE` (lux) and `_LUMINANCE` (cd/m²) of frame 0;
 //! - `asset.extras.daystep`: `version`, `radiance_scale` (W·sr⁻¹·m⁻² per COLOR_0 unit),
-//!   `frames` (label and, per primitive, the accessors of COLOR_0, _ILLUMINANCE and
-//!   _LUMINANCE), `sensors` (positions and per-frame lux accessors, or null);
+//!   `frames` (label, `sun_altitude_deg` when the label is a local time and the site is
+//!   known, and per primitive the accessors of COLOR_0, _ILLUMINANCE and _LUMINANCE),
+//!   `sensors` (positions and per-frame lux accessors, or null);
 //! - materials: base colour = Kd; glazing is blended with alpha 0.3.
 
 use crate::error::{Error, Result};
 use crate::photometry::{grey, lux, Rgb, EFFICACY_LM_PER_W};
+use crate::site::Site;
 use glam::DVec3;
 use gltf::json;
 use json::validation::{Checked, USize64};
@@ -42,6 +46,8 @@ pub struct SolutionGeometry {
     primitives: Vec<Primitive>,
     materials: Vec<GltfMaterial>,
     origin: DVec3,
+    /// The site, so each frame whose label is a local time gets the sun's altitude.
+    site: Option<Site>,
 }
 
 #[derive(Clone, Debug)]
@@ -83,6 +89,9 @@ impl SolutionGeometry {
         let mut prims: Vec<Primitive> = Vec::new();
         let mut prim_of: HashMap<usize, usize> = HashMap::new();
         let mut welded: HashMap<(usize, [i64; 4], [i64; 3]), u32> = HashMap::new();
+        // Per primitive, each vertex's plane (ids in order of first appearance).
+        let mut planes: Vec<Vec<u32>> = Vec::new();
+        let mut plane_id: HashMap<[i64; 4], u32> = HashMap::new();
         let q = |x: f64, s: f64| (x * s).round() as i64;
         for (r, (v, n, area, m)) in rows.iter().enumerate() {
             let m = *m as usize;
@@ -94,11 +103,14 @@ impl SolutionGeometry {
                     indices: Vec::new(),
                     weights: Vec::new(),
                 });
+                planes.push(Vec::new());
                 prims.len() - 1
             });
             // Vertices are shared within one plane of one material only, so edges between
             // planes stay sharp.
             let plane = [q(n.x, 1e4), q(n.y, 1e4), q(n.z, 1e4), q(n.dot(v[0]), 1e3)];
+            let next_id = plane_id.len() as u32;
+            let id = *plane_id.entry(plane).or_insert(next_id);
             for corner in v {
                 let key = (
                     pi,
@@ -107,6 +119,7 @@ impl SolutionGeometry {
                 );
                 let p = &mut prims[pi];
                 let idx = *welded.entry(key).or_insert_with(|| {
+                    planes[pi].push(id);
                     p.positions.push(to_gltf(*corner));
                     p.normals.push(to_gltf(*n));
                     p.weights.push(Vec::new());
@@ -116,11 +129,56 @@ impl SolutionGeometry {
                 p.indices.push(idx);
             }
         }
+        for (p, plane) in prims.iter_mut().zip(&planes) {
+            let (indices, centroids) =
+                super::tjunction::split_t_junctions(&p.positions, plane, &p.indices);
+            for corners in centroids {
+                let mut at = [0.0f32; 3];
+                let mut weights = Vec::new();
+                for &c in &corners {
+                    for (x, v) in at.iter_mut().zip(p.positions[c as usize]) {
+                        *x += v / 3.0;
+                    }
+                    // Each corner's weights scaled to sum 1/3, so the new vertex carries
+                    // the mean of the corners' values: what the triangle showed there.
+                    let sum: f64 = p.weights[c as usize].iter().map(|w| w.1).sum();
+                    if sum > 0.0 {
+                        let own = p.weights[c as usize].iter();
+                        weights.extend(own.map(|&(r, w)| (r, w / sum / 3.0)));
+                    }
+                }
+                p.normals.push(p.normals[corners[0] as usize]);
+                p.positions.push(at);
+                p.weights.push(weights);
+            }
+            p.indices = indices;
+        }
         SolutionGeometry {
             primitives: prims,
             materials,
             origin,
+            site: None,
         }
+    }
+
+    /// The same geometry at `site`: each frame labelled with a local standard time
+    /// (`YYYY-MM-DDTHH:MM[:SS]`) then carries the sun's apparent altitude
+    /// (`sun_altitude_deg`, degrees), from which the viewer finds the frame nearest solar
+    /// noon.
+    pub fn with_site(mut self, site: Site) -> SolutionGeometry {
+        self.site = Some(site);
+        self
+    }
+
+    /// The sun's apparent altitude (degrees) at the local standard time `label`, when the
+    /// site is known and the label is such a time.
+    fn sun_altitude_deg(&self, label: &str) -> Option<f64> {
+        let site = self.site.as_ref()?;
+        let local = ["%Y-%m-%dT%H:%M:%S", "%Y-%m-%dT%H:%M"]
+            .iter()
+            .find_map(|f| chrono::NaiveDateTime::parse_from_str(label, f).ok())?;
+        let at = crate::site::local_to_utc(local, site.utc_offset_h);
+        Some(crate::site::solar_position::solar_position(at, site).altitude_deg())
     }
 
     /// Vertices over all primitives.
@@ -363,7 +421,12 @@ impl SolutionGeometry {
         let frames_json: Vec<json::Value> = frames
             .iter()
             .zip(frame_acc)
-            .map(|(f, prims)| serde_json::json!({ "label": f.label, "primitives": prims }))
+            .map(|(f, prims)| match self.sun_altitude_deg(&f.label) {
+                Some(alt) => serde_json::json!({
+                    "label": f.label, "sun_altitude_deg": alt, "primitives": prims
+                }),
+                None => serde_json::json!({ "label": f.label, "primitives": prims }),
+            })
             .collect();
         let extras = serde_json::json!({ "daystep": {
             "version": 1,
@@ -430,7 +493,7 @@ pub fn geometry_of(
             glazing: m.is_glazing(),
         })
         .collect();
-    SolutionGeometry::new(&rows, materials, scene.origin)
+    SolutionGeometry::new(&rows, materials, scene.origin).with_site(scene.site)
 }
 
 /// One frame of `op`'s solution `state`: each row's radiance B/π + its emission, and its
@@ -456,3 +519,7 @@ pub fn frame_of(
         sensor_lux,
     }
 }
+
+#[cfg(test)]
+#[path = "gltf_tests.rs"]
+mod tests;

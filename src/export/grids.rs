@@ -22,6 +22,10 @@ pub struct GridSpan {
     pub sensors: Vec<usize>,
 }
 
+/// Name of the one grid a scene without sensor grids (OBJ, `.rad`) is treated as, in the
+/// report page and the compliance results.
+pub const ALL_SENSORS: &str = "all sensors";
+
 /// The scene's sensor grids as output spans (sensor indices of the run's order).
 pub fn spans_of(scene: &crate::scene::Scene) -> Vec<GridSpan> {
     scene

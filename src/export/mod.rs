@@ -15,6 +15,7 @@ pub mod grids;
 pub mod plan_map;
 pub mod plot;
 pub mod report_page;
+mod tjunction;
 pub mod viewer;
 
 use crate::error::{Error, Result};

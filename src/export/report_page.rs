@@ -65,7 +65,7 @@ fn grids_of(scene: &Scene, n: usize) -> Vec<GridView> {
     let spans = super::grids::spans_of(scene);
     if spans.is_empty() {
         return vec![GridView {
-            id: "all sensors".into(),
+            id: super::grids::ALL_SENSORS.into(),
             room: None,
             sensors: (0..n).collect(),
         }];

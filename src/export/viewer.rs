@@ -8,7 +8,8 @@
 //!
 //! Routes: `/` without a query redirects to `/?glb=NAME.glb`; `/`, `/index.html` and
 //! `/viewer.html` give the page; `/NAME.glb` gives the file, read again on every request so
-//! a re-exported solution shows on reload; anything else is 404.
+//! a re-exported solution shows on reload; `/favicon.ico` is 204 (no icon); anything else is
+//! 404.
 //!
 //! The model is often a client's confidential building, so the server answers only its own
 //! origin: a request whose `Host` is not `127.0.0.1:PORT`, `localhost:PORT` or
@@ -46,6 +47,9 @@ pub(crate) enum Answer {
     /// 200 with the `.glb` if it is still a valid glTF binary when read, else 409 (500 when
     /// it cannot be read).
     Model,
+    /// 204: `/favicon.ico`, which browsers ask for unprompted; answered with nothing rather
+    /// than 404, so the browser's console shows no failed request.
+    NoIcon,
     /// 404: any other path.
     NotFound,
     /// 403: no `Host`, several, or one that is not this server's own origin (a page from
@@ -97,6 +101,9 @@ pub(crate) fn decide(method: &str, hosts: &[&str], url: &str, port: u16, name: &
     let decoded = path.strip_prefix('/').and_then(percent_decode);
     if decoded.as_deref() == Some(name) {
         return Answer::Model;
+    }
+    if path == "/favicon.ico" {
+        return Answer::NoIcon;
     }
     Answer::NotFound
 }
@@ -346,6 +353,7 @@ impl ViewerServer {
                 .with_header(header("Content-Type", "text/html; charset=utf-8"))
                 .boxed(),
             Answer::Model => self.model().boxed(),
+            Answer::NoIcon => tiny_http::Response::empty(204).boxed(),
             Answer::NotFound => text(404, "not found").boxed(),
             Answer::ForeignHost => text(
                 403,

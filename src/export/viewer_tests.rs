@@ -221,7 +221,7 @@ fn paths_other_than_the_page_and_the_model_are_not_found() {
         "/%FF",
         "/index.htm",
         "/viewer.html/",
-        "/favicon.ico",
+        "/favicon.ico/",
         "http://127.0.0.1/room.glb",
         "*",
     ] {
@@ -241,6 +241,12 @@ fn paths_other_than_the_page_and_the_model_are_not_found() {
     ] {
         let (head, _) = get(addr, path);
         assert!(matches!(status(&head), "200" | "302"), "{path}: {head}");
+    }
+    // The icon browsers ask for on their own: nothing, and not a 404 in their console.
+    for path in ["/favicon.ico", "/favicon.ico?v=1"] {
+        let (head, body) = get(addr, path);
+        assert_eq!(status(&head), "204", "{path}: {head}");
+        assert!(body.is_empty(), "{path}");
     }
 }
 
@@ -545,6 +551,8 @@ fn expected(method: &str, hosts: &[&str], url: &str, port: u16, name: &str) -> A
     }
     if bytes == name.as_bytes() {
         Answer::Model
+    } else if path == "/favicon.ico" {
+        Answer::NoIcon
     } else {
         Answer::NotFound
     }
@@ -756,6 +764,7 @@ fn random_requests_over_a_socket_get_the_specified_status() {
             let want = match expected("GET", &[host.trim()], &path, port, "room.glb") {
                 Answer::Page | Answer::Model => "200",
                 Answer::Redirect => "302",
+                Answer::NoIcon => "204",
                 Answer::NotFound => "404",
                 Answer::ForeignHost => "403",
                 Answer::MethodNotAllowed => "405",

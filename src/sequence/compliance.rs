@@ -75,7 +75,7 @@ fn grids_of(scene: &Scene) -> Vec<Grid> {
     let spans = export::grids::spans_of(scene);
     if spans.is_empty() {
         return vec![Grid {
-            name: "sensors".into(),
+            name: export::grids::ALL_SENSORS.into(),
             sensors: (0..scene.sensors.len()).collect(),
         }];
     }

@@ -37,12 +37,13 @@ chrome=(/usr/bin/chromium --headless --no-sandbox --disable-gpu --hide-scrollbar
 cd "$root"
 cargo build -j 1 --quiet --bin daystep
 daystep="$target/debug/daystep"
-run() { # scene out start end
+run() { # scene out start end [more flags]
     rm -rf "$2"
     "$daystep" annual "$1" --weather scenes/office/weather.epw --out "$2" --start "$3" \
-        --end "$4" --quality draft --no-cache 2>&1 | tail -n1
+        --end "$4" --quality draft --no-cache "${@:5}" 2>&1 | tail -n1
 }
-run scenes/office/scene.toml "$out/office" 2026-06-20 2026-06-23
+# The office with --leed: the page has its LEED table and blind heat map too.
+run scenes/office/scene.toml "$out/office" 2026-06-20 2026-06-23 --leed
 run scenes/honeybee/scene.toml "$out/honeybee" 2026-01-20 2026-01-20
 
 for s in office honeybee; do
