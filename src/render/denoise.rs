@@ -44,6 +44,9 @@ pub(super) struct PixelOut {
     pub disc_abs: f64,
     /// The solve's iteration error (grey).
     pub iteration: f64,
+    /// Whether `var_ind` was measured (two or more antialiasing samples): without it the
+    /// window does not grow, since its noise could not be told from the light's variation.
+    pub noise_known: bool,
     /// The plane all its samples lie on (0: several, glazing or sky: not filtered).
     pub key: u64,
     pub valid: bool,
@@ -79,7 +82,8 @@ pub(super) fn filter(px: &[PixelOut], w: usize, h: usize, max_radius: usize) -> 
                         err: (p.var_direct + f.var).sqrt() + f.disc.abs() + p.iteration,
                     };
                 }
-                if r >= max_radius || best.err <= TARGET * grey(best.value).abs() {
+                let small = best.err <= TARGET * grey(best.value).abs();
+                if r >= max_radius || small || !p.noise_known {
                     return best;
                 }
                 r = (r * 3).div_ceil(2).min(max_radius);
@@ -106,7 +110,7 @@ fn fit(px: &[PixelOut], w: usize, h: usize, i: usize, r: usize) -> Option<Fit> {
         (y0..y1).flat_map(move |yy| {
             (x0..x1).filter_map(move |xx| {
                 let q = &px[yy * w + xx];
-                (q.key == key).then(|| (xx as f64 - x as f64, yy as f64 - y as f64, q))
+                (q.key == key).then_some((xx as f64 - x as f64, yy as f64 - y as f64, q))
             })
         })
     };
@@ -145,7 +149,8 @@ fn first_row_of_inverse(s: &[[f64; 3]; 3]) -> Option<[f64; 3]> {
     let c02 = s[0][1] * s[1][2] - s[0][2] * s[1][1];
     let det = s[0][0] * c00 + s[1][0] * c01 + s[2][0] * c02;
     let scale = s[0][0] * s[1][1] * s[2][2];
-    if s[0][0] < 4.0 || !(det > 1e-9 * scale) {
+    // NaN determinants fail the comparison and are refused too.
+    if s[0][0] < 4.0 || det.is_nan() || det <= 1e-9 * scale {
         return None;
     }
     Some([c00 / det, c01 / det, c02 / det])
@@ -161,6 +166,7 @@ mod tests {
             var_ind: var,
             key,
             valid: true,
+            noise_known: true,
             ..PixelOut::default()
         }
     }
@@ -217,13 +223,22 @@ mod tests {
         let (w, h) = (40, 40);
         let px: Vec<PixelOut> = (0..w * h)
             .map(|i| {
-                let s = if crate::math::rng::mix64(i as u64) & 1 == 0 { 3.0 } else { -3.0 };
+                let s = if crate::math::rng::mix64(i as u64) & 1 == 0 {
+                    3.0
+                } else {
+                    -3.0
+                };
                 pixel(20.0 + s, 9.0, 5)
             })
             .collect();
         for f in filter(&px, w, h, 8) {
             assert!(f.err < 3.0 * 0.5, "{}", f.err);
-            assert!((grey(f.value) - 20.0).abs() <= 3.0 * f.err, "{} ± {}", grey(f.value), f.err);
+            assert!(
+                (grey(f.value) - 20.0).abs() <= 3.0 * f.err,
+                "{} ± {}",
+                grey(f.value),
+                f.err
+            );
         }
     }
 }

@@ -483,6 +483,34 @@ mod tests {
     }
 
     #[test]
+    fn the_ramp_fills_a_tall_picture_and_every_label_is_drawn_in_its_band() {
+        let opts = Falsecolor::default();
+        let mut im = image_of(&[100.0; 64 * 480], Quantity::Radiance);
+        im.width = 64;
+        im.height = 480;
+        let map = opts.to_rgba8(&im);
+        assert_eq!((map.width, map.height), (164, 480));
+        // The unit's line is 25 rows (200 / 8); the ramp fills the 455 rows below it.
+        let ramp = 455.0;
+        assert_eq!(map.pixel(99, 479), encoded(palette(0.5 / ramp)));
+        assert_eq!(map.pixel(99, 25), encoded(palette((ramp - 0.5) / ramp)));
+        // Each of the 8 bands' labels puts white pixels near its band's middle, and the
+        // text is of a readable size: at least 8 rows of white in the top band.
+        for j in 0..8 {
+            let mid = 25.0 + (j as f64 + 0.5) * ramp / 8.0;
+            let rows: Vec<usize> = (0..map.height)
+                .filter(|&y| (0..100).any(|x| map.pixel(x, y) == [255, 255, 255]))
+                .filter(|&y| (y as f64 - mid).abs() < ramp / 16.0)
+                .collect();
+            assert!(
+                rows.len() >= 8,
+                "band {j}: {} rows with white text",
+                rows.len()
+            );
+        }
+    }
+
+    #[test]
     fn contour_lines_colour_only_band_edges() {
         let opts = Falsecolor {
             contour_lines: true,

@@ -39,7 +39,11 @@ use crate::sky::Sky;
 use crate::trace::{barycentric, cosine_direction, End, Outcome, Tracer};
 use glam::DVec3;
 use rayon::prelude::*;
+use record::FlatSample;
 use std::f64::consts::PI;
+
+#[path = "gather_record.rs"]
+mod record;
 
 /// Angular radius of the sun's disc, radians (0.533° across, Radiance's `gensky` sun).
 pub const SUN_RADIUS_RAD: f64 = 0.533 / 2.0 * PI / 180.0;
@@ -118,64 +122,6 @@ struct Surface {
 struct Sample {
     aa: u32,
     kind: Kind,
-}
-
-/// A [`Sample`] as stored in a cache record (plain old data, no padding).
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-#[repr(C)]
-struct FlatSample {
-    /// Surface point, or sky direction.
-    point: [f64; 3],
-    tau: [f32; 3],
-    /// 0 black, 1 sky, 2 surface.
-    kind: u32,
-    aa: u32,
-    tri: u32,
-    start: u32,
-    len: u32,
-}
-
-impl FlatSample {
-    fn of(s: &Sample) -> FlatSample {
-        let mut f = FlatSample {
-            aa: s.aa,
-            ..FlatSample::default()
-        };
-        match s.kind {
-            Kind::Black => {}
-            Kind::Sky { dir, tau } => {
-                f.kind = 1;
-                f.point = dir.to_array();
-                f.tau = tau;
-            }
-            Kind::Surface(x) => {
-                f.kind = 2;
-                f.point = x.point.to_array();
-                f.tau = x.tau;
-                (f.tri, f.start, f.len) = (x.tri, x.start, x.len);
-            }
-        }
-        f
-    }
-
-    fn sample(&self) -> Option<Sample> {
-        let kind = match self.kind {
-            0 => Kind::Black,
-            1 => Kind::Sky {
-                dir: DVec3::from_array(self.point),
-                tau: self.tau,
-            },
-            2 => Kind::Surface(Surface {
-                tri: self.tri,
-                point: DVec3::from_array(self.point),
-                tau: self.tau,
-                start: self.start,
-                len: self.len,
-            }),
-            _ => return None,
-        };
-        Some(Sample { aa: self.aa, kind })
-    }
 }
 
 const TAG_OFFSETS: u32 = crate::cache::FIRST_USER_TAG;
@@ -478,32 +424,13 @@ impl ViewGeometry {
                     disc: disc / n,
                     disc_abs: disc_abs / n,
                     iteration: solution.iteration_error * grey(gathered).abs() / n,
+                    noise_known: n_aa > 1,
                     key: key.unwrap_or(0),
                     valid: true,
                 }
             })
             .collect();
         let filtered = filter(&px, w, h, self.opts.filter_radius);
-        if std::env::var("DAYSTEP_ERR_DIAG").is_ok() {
-            let mut cats: Vec<(&str, Vec<f64>, Vec<[f64; 4]>)> = vec![("unkeyed", vec![], vec![]), ("keyed", vec![], vec![])];
-            for (p, f) in px.iter().zip(&filtered) {
-                let v = grey(f.value);
-                if !p.valid || v <= 0.0 { continue; }
-                let c = usize::from(p.key != 0);
-                cats[c].1.push(f.err / v);
-                cats[c].2.push([p.var_direct.sqrt() / v, p.var_ind.sqrt() / v, p.disc_abs / v, p.iteration / v]);
-            }
-            let total: usize = cats.iter().map(|c| c.1.len()).sum();
-            for (name, mut r, comp) in cats {
-                let mut hi: Vec<[f64; 4]> = comp.iter().zip(&r).filter(|(_, &x)| x > 0.1).map(|(c, _)| *c).collect();
-                let nhi = hi.len();
-                let mean = |k: usize, hi: &mut Vec<[f64; 4]>| { hi.sort_by(|a, b| a[k].total_cmp(&b[k])); if hi.is_empty() { 0.0 } else { hi[hi.len() / 2][k] * 100.0 } };
-                let m = [mean(0, &mut hi), mean(1, &mut hi), mean(2, &mut hi), mean(3, &mut hi)];
-                r.sort_by(f64::total_cmp);
-                let q = |f: f64| if r.is_empty() { 0.0 } else { r[((r.len() - 1) as f64 * f) as usize] * 100.0 };
-                eprintln!("DIAG {name}: {} of {total} px, p50 {:.2} p95 {:.2}; >10%: {nhi}, their median components direct {:.1} ind {:.1} disc {:.1} iter {:.1}", r.len(), q(0.5), q(0.95), m[0], m[1], m[2], m[3]);
-            }
-        }
         for (i, (p, f)) in px.iter().zip(filtered).enumerate() {
             img.rgb[i] = f.value;
             img.err[i] = f.err;
@@ -628,7 +555,11 @@ fn pixel_geometry(
     });
     let first = keys.next().unwrap_or(0);
     let one_plane = first != 0 && keys.all(|k| k == first);
-    let gather_per = if one_plane { gather_per } else { 2 * gather_per };
+    let gather_per = if one_plane {
+        gather_per
+    } else {
+        2 * gather_per
+    };
     for (aa, out, dir) in ends {
         let kind = match out.end {
             End::Escaped => Kind::Sky {
