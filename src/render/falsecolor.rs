@@ -2,7 +2,8 @@
 //! (luminance cd/m² or illuminance lux, 179 × grey) is mapped to `v` in [0, 1] on a linear
 //! scale up to `-s` or a logarithmic one over `-log N` decades, and `v` to a colour of the
 //! default palette (`-pal def`); a legend strip on the left shows the palette as a
-//! continuous ramp with `-n` labels at the middle of each band and the unit above.
+//! continuous ramp filling the picture's height below the unit, with `-n` labels at the
+//! middle of each band, in DejaVu Sans (embedded, `assets/fonts`; [`super::text`]).
 //!
 //! The palette's linear colours are written to 8-bit PNG through the sRGB curve, as a
 //! Radiance picture of them looks on a display.
@@ -11,6 +12,7 @@ use crate::error::Result;
 use crate::files;
 use crate::photometry::Rgb;
 use crate::render::image::{Image, Quantity};
+use crate::render::text;
 use crate::render::tonemap::{encode_png, provenance_text, srgb8};
 use std::path::Path;
 
@@ -72,8 +74,8 @@ pub struct Falsecolor {
     /// Legend width in pixels (`-lw`, default 100); the legend is left out when this is
     /// ≤ 20 or `legend_height` ≤ 40, as `falsecolor` does.
     pub legend_width: usize,
-    /// Legend height in pixels (`-lh`, default 200) of the colour ramp; the unit label
-    /// sits above it.
+    /// Least legend height in pixels (`-lh`, default 200) of the colour ramp; the unit
+    /// label sits above it, and the ramp grows to fill the picture's height below it.
     pub legend_height: usize,
 }
 
@@ -102,7 +104,7 @@ pub struct Rgba8 {
 }
 
 impl Rgba8 {
-    fn new(width: usize, height: usize) -> Rgba8 {
+    pub(super) fn new(width: usize, height: usize) -> Rgba8 {
         let mut data = vec![0; width * height * 4];
         data.chunks_mut(4).for_each(|p| p[3] = 255);
         Rgba8 {
@@ -115,6 +117,18 @@ impl Rgba8 {
     fn set(&mut self, x: usize, y: usize, c: [u8; 3]) {
         let i = 4 * (y * self.width + x);
         self.data[i..i + 3].copy_from_slice(&c);
+    }
+
+    /// Mixes colour `c` into pixel (`x`, `y`) by `coverage` in [0, 1]; outside: nothing.
+    pub(super) fn blend(&mut self, x: i64, y: i64, c: [u8; 3], coverage: f32) {
+        if x < 0 || y < 0 || x as usize >= self.width || y as usize >= self.height {
+            return;
+        }
+        let i = 4 * (y as usize * self.width + x as usize);
+        let a = coverage.clamp(0.0, 1.0);
+        for (d, s) in self.data[i..i + 3].iter_mut().zip(c) {
+            *d = (f32::from(*d) * (1.0 - a) + f32::from(s) * a).round() as u8;
+        }
     }
 
     /// The RGB bytes of pixel (`x` from the left, `y` from the top).
@@ -183,8 +197,15 @@ impl Falsecolor {
         } else {
             (0, 0)
         };
-        let line = ((lh as f64 / steps as f64) + 0.5).floor() as usize;
-        let height = image.height.max(lh).max((steps + 1) * line);
+        // The unit's line on top, then the ramp down to the bottom edge, at least `lh` tall
+        // and as tall as the image allows.
+        let unit_line = if legend {
+            ((lh as f64 / steps as f64) + 0.5).floor().clamp(16.0, 40.0) as usize
+        } else {
+            0
+        };
+        let height = image.height.max(lh + unit_line);
+        let ramp = height - unit_line;
         let mut out = Rgba8::new(lw + image.width, height);
 
         let vs: Vec<f64> = (0..image.rgb.len())
@@ -227,11 +248,11 @@ impl Falsecolor {
         }
 
         if legend {
-            for yb in 0..lh {
-                let v = (yb as f64 + 0.5) / lh as f64;
+            for yb in 0..ramp {
+                let v = (yb as f64 + 0.5) / ramp as f64;
                 if self.contour_lines {
-                    let below = (yb as f64 - 0.5) / lh as f64;
-                    let above = (yb as f64 + 1.5) / lh as f64;
+                    let below = (yb as f64 - 0.5) / ramp as f64;
+                    let above = (yb as f64 + 1.5) / ramp as f64;
                     if self.band(below) == self.band(above) {
                         continue;
                     }
@@ -242,55 +263,31 @@ impl Falsecolor {
                 }
             }
             let labels = self.legend_labels(image.quantity);
-            let longest = labels.iter().map(|s| s.chars().count()).max().unwrap_or(1);
-            let k = (line / 8)
-                .min(lw.saturating_sub(4) / (8 * longest.max(1)))
-                .max(1);
-            for (j, text) in labels.iter().enumerate() {
-                // Line j of `steps + 1` lines stacked up from the bottom edge, the unit
-                // (j = 0) on top.
-                let line_top = height - (steps + 1 - j) * line;
-                let y0 = line_top + line.saturating_sub(8 * k) / 2;
-                draw_text(&mut out, 2, y0, k, text, [0, 0, 0], 1);
-                draw_text(&mut out, 2, y0, k, text, [255, 255, 255], 0);
+            let band = ramp as f64 / steps as f64;
+            // One size for all labels: as large as the band and the strip's width allow,
+            // within 11 to 24 pixels.
+            let widest = labels
+                .iter()
+                .map(|t| text::width(t, 1.0))
+                .fold(0.0, f64::max)
+                .max(1e-9);
+            let size = (0.6 * band)
+                .min(0.8 * unit_line as f64)
+                .min((lw as f64 - 8.0) / widest)
+                .clamp(11.0, 24.0);
+            for (j, label) in labels.iter().enumerate() {
+                // The unit (j = 0) in the top line, band labels at their band's middle.
+                let centre = if j == 0 {
+                    unit_line as f64 / 2.0
+                } else {
+                    unit_line as f64 + (j as f64 - 0.5) * band
+                };
+                // A dark shadow one pixel right and down keeps light bands readable.
+                text::draw(&mut out, 5.0, centre + 1.0, size, label, [0, 0, 0]);
+                text::draw(&mut out, 4.0, centre, size, label, [255, 255, 255]);
             }
         }
         out
-    }
-}
-
-// Text in the 8×8 public-domain bitmap font, each font pixel a k×k block, clipped to the
-// legend; `shadow` shifts it right and down.
-fn draw_text(
-    out: &mut Rgba8,
-    x0: usize,
-    y0: usize,
-    k: usize,
-    text: &str,
-    c: [u8; 3],
-    shadow: usize,
-) {
-    for (n, ch) in text.chars().enumerate() {
-        let glyph = font8x8::legacy::BASIC_LEGACY
-            .get(ch as usize)
-            .copied()
-            .unwrap_or([0; 8]);
-        for (gy, row) in glyph.iter().enumerate() {
-            for gx in 0..8 {
-                if row & (1 << gx) == 0 {
-                    continue;
-                }
-                for dy in 0..k {
-                    for dx in 0..k {
-                        let x = x0 + shadow + (n * 8 + gx) * k + dx;
-                        let y = y0 + shadow + gy * k + dy;
-                        if x < out.width && y < out.height {
-                            out.set(x, y, c);
-                        }
-                    }
-                }
-            }
-        }
     }
 }
 
@@ -483,6 +480,34 @@ mod tests {
         };
         assert!(white_in(0..25));
         assert!(white_in(25..50));
+    }
+
+    #[test]
+    fn the_ramp_fills_a_tall_picture_and_every_label_is_drawn_in_its_band() {
+        let opts = Falsecolor::default();
+        let mut im = image_of(&[100.0; 64 * 480], Quantity::Radiance);
+        im.width = 64;
+        im.height = 480;
+        let map = opts.to_rgba8(&im);
+        assert_eq!((map.width, map.height), (164, 480));
+        // The unit's line is 25 rows (200 / 8); the ramp fills the 455 rows below it.
+        let ramp = 455.0;
+        assert_eq!(map.pixel(99, 479), encoded(palette(0.5 / ramp)));
+        assert_eq!(map.pixel(99, 25), encoded(palette((ramp - 0.5) / ramp)));
+        // Each of the 8 bands' labels puts white pixels near its band's middle, and the
+        // text is of a readable size: at least 8 rows of white in the top band.
+        for j in 0..8 {
+            let mid = 25.0 + (j as f64 + 0.5) * ramp / 8.0;
+            let rows: Vec<usize> = (0..map.height)
+                .filter(|&y| (0..100).any(|x| map.pixel(x, y) == [255, 255, 255]))
+                .filter(|&y| (y as f64 - mid).abs() < ramp / 16.0)
+                .collect();
+            assert!(
+                rows.len() >= 8,
+                "band {j}: {} rows with white text",
+                rows.len()
+            );
+        }
     }
 
     #[test]

@@ -11,8 +11,9 @@
 //!   (the cosine is the per-pixel importance): a ray that leaves the scene reads the sky's
 //!   radiance in its direction (binned to 0.7°, evaluated once per frame), one that meets a
 //!   surface reads B/π of the mesh row it meets, with the sensors' rule for the first
-//!   pane's mirror image. The gathered part is then averaged over nearby pixels on the same
-//!   plane and material ([`RenderOptions::filter_radius`]).
+//!   pane's mirror image. The gathered part is then re-estimated from nearby pixels on the
+//!   same plane and material, over a window that grows until the stated error is small
+//!   ([`RenderOptions::filter_radius`], [`super::denoise`]).
 //!
 //! Why the sky is gathered and not read from the elements, as the paper's §6.1 does: the
 //! elements hold the direct sky as an average over each element, and on the sample
@@ -28,6 +29,7 @@
 //! to every step of a sequence ([`ViewGeometry::frame`]). Rays come from a counter-based
 //! generator keyed by pixel, so images do not depend on the thread count.
 
+use super::denoise::{filter, PixelOut};
 use super::image::{Image, Quantity};
 use crate::math::rng::{mix64, uniform};
 use crate::photometry::{grey, Rgb};
@@ -37,7 +39,11 @@ use crate::sky::Sky;
 use crate::trace::{barycentric, cosine_direction, End, Outcome, Tracer};
 use glam::DVec3;
 use rayon::prelude::*;
+use record::FlatSample;
 use std::f64::consts::PI;
+
+#[path = "gather_record.rs"]
+mod record;
 
 /// Angular radius of the sun's disc, radians (0.533° across, Radiance's `gensky` sun).
 pub const SUN_RADIUS_RAD: f64 = 0.533 / 2.0 * PI / 180.0;
@@ -55,8 +61,9 @@ pub struct RenderOptions {
     pub gather_rays: u32,
     /// Radiance seen, or irradiance on the surfaces seen (`-i`).
     pub quantity: Quantity,
-    /// Half-width (pixels) of the window over which the gathered interreflection is
-    /// averaged among pixels on the same plane and material (0: none).
+    /// Largest half-width (pixels) of the window over which the gathered interreflection
+    /// is re-estimated from pixels on the same plane and material (0: none; the window
+    /// starts at 2 and grows while the pixel's stated error is above 1 % of its value).
     pub filter_radius: usize,
     /// Seed of the ray generator.
     pub seed: u64,
@@ -70,7 +77,7 @@ impl Default for RenderOptions {
             samples: 4,
             gather_rays: 64,
             quantity: Quantity::Radiance,
-            filter_radius: 2,
+            filter_radius: 8,
             seed: 0x5eed_0015,
         }
     }
@@ -115,64 +122,6 @@ struct Surface {
 struct Sample {
     aa: u32,
     kind: Kind,
-}
-
-/// A [`Sample`] as stored in a cache record (plain old data, no padding).
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-#[repr(C)]
-struct FlatSample {
-    /// Surface point, or sky direction.
-    point: [f64; 3],
-    tau: [f32; 3],
-    /// 0 black, 1 sky, 2 surface.
-    kind: u32,
-    aa: u32,
-    tri: u32,
-    start: u32,
-    len: u32,
-}
-
-impl FlatSample {
-    fn of(s: &Sample) -> FlatSample {
-        let mut f = FlatSample {
-            aa: s.aa,
-            ..FlatSample::default()
-        };
-        match s.kind {
-            Kind::Black => {}
-            Kind::Sky { dir, tau } => {
-                f.kind = 1;
-                f.point = dir.to_array();
-                f.tau = tau;
-            }
-            Kind::Surface(x) => {
-                f.kind = 2;
-                f.point = x.point.to_array();
-                f.tau = x.tau;
-                (f.tri, f.start, f.len) = (x.tri, x.start, x.len);
-            }
-        }
-        f
-    }
-
-    fn sample(&self) -> Option<Sample> {
-        let kind = match self.kind {
-            0 => Kind::Black,
-            1 => Kind::Sky {
-                dir: DVec3::from_array(self.point),
-                tau: self.tau,
-            },
-            2 => Kind::Surface(Surface {
-                tri: self.tri,
-                point: DVec3::from_array(self.point),
-                tau: self.tau,
-                start: self.start,
-                len: self.len,
-            }),
-            _ => return None,
-        };
-        Some(Sample { aa: self.aa, kind })
-    }
 }
 
 const TAG_OFFSETS: u32 = crate::cache::FIRST_USER_TAG;
@@ -358,7 +307,7 @@ impl ViewGeometry {
                 let mut per_aa_ind = vec![Rgb::ZERO; n_aa as usize];
                 let mut key = None;
                 let mut per_part = vec![Rgb::ZERO; parts];
-                let (mut disc, mut gathered) = (0.0, Rgb::ZERO);
+                let (mut disc, mut disc_abs, mut gathered) = (0.0, 0.0, Rgb::ZERO);
                 for s in samples {
                     let v = match s.kind {
                         Kind::Black => Rgb::ZERO,
@@ -413,7 +362,8 @@ impl ViewGeometry {
                                 }
                             }
                             e += fine + sky_e;
-                            disc += grey(k * (fine - coarse)).abs();
+                            disc += grey(k * (fine - coarse));
+                            disc_abs += grey(k * (fine - coarse)).abs();
                             gathered += k * fine;
                             per_aa_ind[s.aa as usize] += k * (fine + sky_e);
                             let pk = plane_key(tracer, f.tri, f.point);
@@ -471,43 +421,28 @@ impl ViewGeometry {
                     ind,
                     var_direct: var_direct + var_parts,
                     var_ind,
-                    bias: disc / n + solution.iteration_error * grey(gathered).abs() / n,
+                    disc: disc / n,
+                    disc_abs: disc_abs / n,
+                    iteration: solution.iteration_error * grey(gathered).abs() / n,
+                    noise_known: n_aa > 1,
                     key: key.unwrap_or(0),
                     valid: true,
                 }
             })
             .collect();
-        let filtered = filter_gathered(&px, w, h, self.opts.filter_radius);
-        for (i, (p, (ind, var_ind))) in px.iter().zip(filtered).enumerate() {
-            img.rgb[i] = p.direct + ind;
-            img.err[i] = (p.var_direct + var_ind).sqrt() + p.bias;
+        let filtered = filter(&px, w, h, self.opts.filter_radius);
+        for (i, (p, f)) in px.iter().zip(filtered).enumerate() {
+            img.rgb[i] = f.value;
+            img.err[i] = f.err;
             img.valid[i] = p.valid;
         }
         img
     }
 }
 
-/// One pixel before the gathered part is filtered.
-#[derive(Clone, Copy, Debug, Default)]
-struct PixelOut {
-    /// Everything but the gathered interreflection (radiance, or irradiance).
-    direct: Rgb,
-    /// The gathered interreflection.
-    ind: Rgb,
-    /// Variance of `direct`'s mean (antialiasing) plus the parts' variance (grey).
-    var_direct: f64,
-    /// Variance of `ind`'s mean over antialiasing samples (grey).
-    var_ind: f64,
-    /// Discretisation and iteration error (grey).
-    bias: f64,
-    /// The plane all its samples lie on (0: several, glazing or sky: not filtered).
-    key: u64,
-    valid: bool,
-}
-
 /// A key of the plane and material of triangle `tri` (never 0): pixels on one plane of one
-/// material share their gathered light in [`filter_gathered`]. The plane's offset is
-/// rounded to 1 mm and its normal to 1e-4.
+/// material share their gathered light in the filter. The plane's offset is rounded to
+/// 1 mm and its normal to 1e-4.
 fn plane_key(tracer: &Tracer, tri: u32, point: DVec3) -> u64 {
     let n = tracer.normal(tri);
     let q = |x: f64, s: f64| (x * s).round() as i64 as u64;
@@ -516,36 +451,6 @@ fn plane_key(tracer: &Tracer, tri: u32, point: DVec3) -> u64 {
         q(n.x, 1e4) ^ mix64(q(n.y, 1e4) ^ mix64(q(n.z, 1e4) ^ mix64(q(n.dot(point), 1e3) ^ m))),
     );
     h.max(1)
-}
-
-/// The gathered part of each pixel averaged over the pixels within `radius` that lie on
-/// the same plane of the same material, and the variance of that mean. Interreflected
-/// light varies slowly along a plane, so this lowers the gather's noise by about the
-/// number of pixels averaged at a bias far below it; edges, glazing and sky pixels are
-/// left alone. The pixel order does not matter, so neither does the thread count.
-fn filter_gathered(px: &[PixelOut], w: usize, h: usize, radius: usize) -> Vec<(Rgb, f64)> {
-    (0..px.len())
-        .into_par_iter()
-        .map(|i| {
-            let p = px[i];
-            if radius == 0 || p.key == 0 {
-                return (p.ind, p.var_ind);
-            }
-            let (x, y) = (i % w, i / w);
-            let (mut sum, mut var, mut n) = (Rgb::ZERO, 0.0, 0.0);
-            for yy in y.saturating_sub(radius)..(y + radius + 1).min(h) {
-                for xx in x.saturating_sub(radius)..(x + radius + 1).min(w) {
-                    let q = px[yy * w + xx];
-                    if q.key == p.key {
-                        sum += q.ind;
-                        var += q.var_ind;
-                        n += 1.0;
-                    }
-                }
-            }
-            (sum / n, var / (n * n))
-        })
-        .collect()
 }
 
 /// Marks a gather entry as an escaped ray's sky direction bin instead of a mesh row.
@@ -616,6 +521,8 @@ fn pixel_geometry(
         counter += 1;
         uniform(opts.seed, stream, counter)
     };
+    // The primary rays first: where they end decides the gather rays.
+    let mut ends = Vec::new();
     for i in 0..m {
         for j in 0..m {
             let x = (col + (f64::from(i) + next()) / f64::from(m)) / w;
@@ -625,41 +532,55 @@ fn pixel_geometry(
             };
             let out = tracer.trace(o, d, Rgb::ONE);
             rays += 1;
-            let mut ends = vec![(out, d)];
+            ends.push((aa, out, d));
             if out.glazing_loss != Rgb::ZERO {
                 if let Some(hit) = tracer.first_hit(o, d).filter(|h| h.glazing) {
                     if let Some(mo) = tracer.mirror(hit.tri, hit.point, -d, Rgb::ONE) {
                         let n = tracer.normal(hit.tri);
                         let c = (-d).dot(n);
-                        ends.push((mo, (n * (2.0 * c) + d).normalize()));
+                        ends.push((aa, mo, (n * (2.0 * c) + d).normalize()));
                         rays += 2;
                     }
                 }
             }
-            for (out, dir) in ends {
-                let kind = match out.end {
-                    End::Escaped => Kind::Sky {
-                        dir,
-                        tau: f32s(out.power),
-                    },
-                    End::Front { tri, point, .. } if out.power != Rgb::ZERO => {
-                        let start = entries.len() as u32;
-                        let n = tracer.normal(tri);
-                        rays += gather(tracer, mesh, point, n, gather_per, &mut next, &mut entries);
-                        Kind::Surface(Surface {
-                            tri,
-                            point,
-                            tau: f32s(out.power),
-                            start,
-                            len: entries.len() as u32 - start,
-                        })
-                    }
-                    _ => Kind::Black,
-                };
-                samples.push(Sample { aa, kind });
-            }
             aa += 1;
         }
+    }
+    // A pixel whose samples do not all meet one plane (edges, glazing with its mirror
+    // image) is left alone by the filter, so it gets twice the gather rays across, four
+    // times the rays: its own noise is all the noise it has.
+    let mut keys = ends.iter().map(|(_, out, _)| match out.end {
+        End::Front { tri, point, .. } => plane_key(tracer, tri, point),
+        _ => 0,
+    });
+    let first = keys.next().unwrap_or(0);
+    let one_plane = first != 0 && keys.all(|k| k == first);
+    let gather_per = if one_plane {
+        gather_per
+    } else {
+        2 * gather_per
+    };
+    for (aa, out, dir) in ends {
+        let kind = match out.end {
+            End::Escaped => Kind::Sky {
+                dir,
+                tau: f32s(out.power),
+            },
+            End::Front { tri, point, .. } if out.power != Rgb::ZERO => {
+                let start = entries.len() as u32;
+                let n = tracer.normal(tri);
+                rays += gather(tracer, mesh, point, n, gather_per, &mut next, &mut entries);
+                Kind::Surface(Surface {
+                    tri,
+                    point,
+                    tau: f32s(out.power),
+                    start,
+                    len: entries.len() as u32 - start,
+                })
+            }
+            _ => Kind::Black,
+        };
+        samples.push(Sample { aa, kind });
     }
     (samples, entries, aa, rays)
 }

@@ -8,10 +8,12 @@
 
 pub mod image; // the shared image type
 pub mod gather; // the final gather: a step's solution seen through a camera
+mod denoise; // the gather's error-guided, edge-aware filter
 pub mod exr; // linear HDR OpenEXR with the error channel and provenance
 pub mod rgbe; // Radiance HDR pictures (RGBE), read and written
 pub mod tonemap; // tone-mapped 8-bit sRGB PNG
 pub mod falsecolor; // falsecolor maps with a legend, as Radiance's falsecolor
+mod text; // text in pictures: an embedded open-licence font
 pub mod preview; // playable previews of sequences: animated PNG, HTML slider
 pub mod glare; // daylight glare probability from angular fisheye images
 
