@@ -46,10 +46,18 @@ const PALETTE: [RGBColor; 7] = [
     RGBColor(0x00, 0x00, 0x00), // black
 ];
 
-/// The colour of curve `i` (cycles after the palette's seven).
+/// Grey for curves beyond the palette's seven (the presets' ladder is the eighth).
+const GREY: RGBColor = RGBColor(0x99, 0x99, 0x99);
+
+/// The colour of curve `i`: the palette's seven, then grey.
 pub fn color(i: usize) -> RGBColor {
-    PALETTE[i % PALETTE.len()]
+    PALETTE.get(i).copied().unwrap_or(GREY)
 }
+
+/// Errors below this fraction (0.001 %) are drawn on it: they are round-off, not
+/// convergence (an iteration tolerance's finest rungs agree to 1e-11), and a log axis
+/// down to them would squash every real difference into its top.
+const ERROR_FLOOR: f64 = 1e-5;
 
 /// Writes the plot to `path` (SVG, 900 × 600), atomically.
 ///
@@ -61,27 +69,35 @@ pub fn error_vs_time_svg(path: &Path, title: &str, curves: &[Curve]) -> Result<(
     crate::files::write_atomic(path, svg.as_bytes())
 }
 
-/// The axes' ranges: time (s) over every run's spread, padded; error over the measured
-/// (non-reference) points, with the bottom a little below the smallest one, where the
-/// references are marked.
+/// The axes' ranges: time (s) over every run's spread, padded, except references more
+/// than twice as slow as every measured run: those are drawn at the right edge with their
+/// time in their label, so one slow reference does not squash the curves; error over the measured (non-reference)
+/// points, at least [`ERROR_FLOOR`], with the bottom a little below the smallest one, where
+/// the references are marked.
 fn ranges(curves: &[Curve]) -> ((f64, f64), (f64, f64)) {
     let pts = || curves.iter().flat_map(|c| c.points.iter());
+    let measured_pts = || pts().filter(|p| p.reference.is_none());
     let mut x0 = pts().map(|p| p.seconds_min).fold(f64::INFINITY, f64::min);
-    let mut x1 = pts().map(|p| p.seconds_max).fold(0.0, f64::max);
+    let slowest = measured_pts().map(|p| p.seconds_max).fold(0.0, f64::max);
+    // References up to twice the slowest measured run are on the axis; slower ones clip.
+    let mut x1 = pts()
+        .filter(|p| slowest <= 0.0 || p.seconds_max <= 2.0 * slowest)
+        .map(|p| p.seconds_max)
+        .fold(0.0, f64::max);
     if !(x0.is_finite() && x0 > 0.0) {
         x0 = 0.01;
     }
     x1 = x1.max(x0 * 1.1);
     let measured = || pts().filter(|p| p.reference.is_none()).map(|p| p.rel_err);
     let mut y0 = measured()
-        .filter(|e| *e > 0.0)
+        .map(|e| e.max(ERROR_FLOOR))
         .fold(f64::INFINITY, f64::min);
     let mut y1 = measured().fold(0.0, f64::max);
     if !y0.is_finite() {
         y0 = 1e-3;
     }
     y1 = y1.max(y0 * 10.0);
-    y0 /= 4.0; // room for the reference marks below the smallest measured error
+    y0 /= 16.0; // room for the reference marks and their label rows below the smallest error
     ((x0, x1), (y0, y1 * 1.6))
 }
 
@@ -119,7 +135,21 @@ fn draw(svg: &mut String, title: &str, curves: &[Curve]) -> std::result::Result<
         .y_label_formatter(&|v| percent(*v))
         .draw()
         .map_err(|e| e.to_string())?;
-    let floor = y0 * 1.3;
+    let floor = (y0 * 1.3).max(ERROR_FLOOR);
+    // Every reference mark (curve, time), in time order: its rank picks its label's row.
+    let mut refs: Vec<(usize, f64)> = curves
+        .iter()
+        .enumerate()
+        .flat_map(|(i, c)| {
+            c.points
+                .iter()
+                .filter(|p| p.reference.is_some())
+                .map(move |p| (i, p.seconds))
+        })
+        .collect();
+    refs.sort_by(|a, b| a.1.total_cmp(&b.1));
+    const ROWS: usize = 4;
+    const ROW: f64 = 1.9;
     for (i, c) in curves.iter().enumerate() {
         let color = color(i);
         let measured: Vec<&Point> = c.points.iter().filter(|p| p.reference.is_none()).collect();
@@ -154,9 +184,13 @@ fn draw(svg: &mut String, title: &str, curves: &[Curve]) -> std::result::Result<
         chart
             .draw_series(base.map(|p| Circle::new(p, 7, BLACK.stroke_width(1))))
             .map_err(|e| e.to_string())?;
-        // The reference: a hollow triangle on the bottom line, labelled with its setting.
+        // The reference: a hollow triangle on the bottom line, labelled with its setting;
+        // one beyond the time axis sits on its right edge, its label giving its time.
+        // Labels go in rows by the reference's rank in time, so neighbours do not overlap.
         for p in c.points.iter().filter(|p| p.reference.is_some()) {
-            let at = (p.seconds, y0 * 1.15);
+            let beyond = p.seconds > x1;
+            let x = p.seconds.min(x1);
+            let at = (x, y0 * 1.15);
             chart
                 .draw_series(std::iter::once(TriangleMarker::new(
                     at,
@@ -164,10 +198,16 @@ fn draw(svg: &mut String, title: &str, curves: &[Curve]) -> std::result::Result<
                     color.stroke_width(2),
                 )))
                 .map_err(|e| e.to_string())?;
-            let label = format!("ref: {}", p.reference.as_deref().unwrap_or_default());
+            let setting = p.reference.as_deref().unwrap_or_default();
+            let label = if beyond {
+                format!("ref: {setting} ({:.0} s) \u{2192}", p.seconds)
+            } else {
+                format!("ref: {setting}")
+            };
+            let rank = refs.iter().position(|r| *r == (i, p.seconds)).unwrap_or(0);
             // Right of the mark in the plot's left half, left of it in the right half, so
             // the label stays inside the plot.
-            let h = if p.seconds > 0.5 * (x0 + x1) {
+            let h = if x > 0.5 * (x0 + x1) {
                 HPos::Right
             } else {
                 HPos::Left
@@ -176,12 +216,9 @@ fn draw(svg: &mut String, title: &str, curves: &[Curve]) -> std::result::Result<
                 .into_font()
                 .color(&color)
                 .pos(Pos::new(h, VPos::Center));
+            let y = y0 * 1.45 * ROW.powi((rank % ROWS) as i32);
             chart
-                .draw_series(std::iter::once(Text::new(
-                    label,
-                    (p.seconds, y0 * 1.45),
-                    style,
-                )))
+                .draw_series(std::iter::once(Text::new(label, (x, y), style)))
                 .map_err(|e| e.to_string())?;
         }
     }
@@ -267,5 +304,36 @@ mod tests {
         assert!(x0 <= 3.8 && x1 >= 9.8 && x0 > 3.0 && x1 < 11.0, "{x0} {x1}");
         // The reference's zero does not set the error axis; it sits below the smallest.
         assert!(y0 < 0.002 && y0 > 1e-4 && y1 >= 0.05, "{y0} {y1}");
+    }
+
+    #[test]
+    fn round_off_errors_and_a_slow_reference_do_not_set_the_axes() {
+        let pt = |t: f64, e: f64, r: Option<&str>| Point {
+            seconds: t,
+            seconds_min: t,
+            seconds_max: t,
+            rel_err: e,
+            is_base: false,
+            reference: r.map(str::to_string),
+        };
+        let curves = [Curve {
+            name: "k".into(),
+            points: vec![
+                pt(4.0, 0.05, None),
+                pt(6.0, 1e-13, None),
+                pt(450.0, 0.0, Some("reference")),
+            ],
+        }];
+        let ((x0, x1), (y0, _)) = ranges(&curves);
+        assert!(x0 <= 4.0 && x1 >= 6.0 && x1 < 10.0, "{x0} {x1}");
+        assert!(y0 >= ERROR_FLOOR / 20.0, "{y0}");
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("c.svg");
+        error_vs_time_svg(&p, "t", &curves).unwrap();
+        let s = std::fs::read_to_string(&p).unwrap();
+        assert!(
+            s.contains("ref: reference (450 s)"),
+            "the clipped reference names its time"
+        );
     }
 }
