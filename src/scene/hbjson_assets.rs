@@ -107,12 +107,63 @@ impl Builder {
                 g.identifier
             ));
         }
+        let areas = match &g.mesh {
+            Some(m) if m.faces.len() == g.sensors.len() && !g.sensors.is_empty() => {
+                Some(self.cell_areas(m, who)?)
+            }
+            Some(m) => {
+                self.out.warnings.push(format!(
+                    "{}: SensorGrid `{}`: its mesh has {} faces for {} sensors; shares are \
+                     by sensor count, not area",
+                    self.path.display(),
+                    g.identifier,
+                    m.faces.len(),
+                    g.sensors.len()
+                ));
+                None
+            }
+            None => None,
+        };
         self.out.imported.grids.push(GridInfo {
             identifier: g.identifier,
             room: g.room_identifier,
             sensors: g.sensors.len(),
+            areas,
         });
         Ok(())
+    }
+
+    /// Area of each face of a grid's mesh, m² (triangles and quads, a quad as two
+    /// triangles: honeybee's cells are planar).
+    fn cell_areas(&self, m: &Mesh3DJ, who: Who) -> Result<Vec<f64>> {
+        let v: Vec<DVec3> = self.ring(&m.vertices, who)?;
+        m.faces
+            .iter()
+            .enumerate()
+            .map(|(k, f)| {
+                let p = |i: usize| {
+                    v.get(f[i]).copied().ok_or_else(|| {
+                        self.bad(
+                            who,
+                            format!(
+                                "mesh face {k} refers to vertex {} of the {} given",
+                                f[i],
+                                v.len()
+                            ),
+                        )
+                    })
+                };
+                let tri = |a: DVec3, b: DVec3, c: DVec3| 0.5 * (b - a).cross(c - a).length();
+                match f.len() {
+                    3 => Ok(tri(p(0)?, p(1)?, p(2)?)),
+                    4 => Ok(tri(p(0)?, p(1)?, p(2)?) + tri(p(0)?, p(2)?, p(3)?)),
+                    n => Err(self.bad(
+                        who,
+                        format!("mesh face {k} has {n} vertices: 3 or 4 expected"),
+                    )),
+                }
+            })
+            .collect()
     }
 
     pub(super) fn view(&mut self, v: Value, ctx: &dyn Fn() -> String) -> Result<()> {

@@ -164,6 +164,8 @@ pub(super) struct SensorGridJ {
     pub identifier: String,
     pub room_identifier: Option<String>,
     pub sensors: Vec<SensorJ>,
+    /// One face per sensor (its cell), when the grid was made from a mesh.
+    pub mesh: Option<Mesh3DJ>,
 }
 
 /// One `Sensor` of a grid: position and direction, model units.

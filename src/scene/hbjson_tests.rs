@@ -509,3 +509,40 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn grid_meshes_give_each_sensor_its_cells_area_in_square_metres() {
+    // Two cells, 2 m × 2 m (a quad) and half of it (a triangle), in mm and in m.
+    for units in ["Meters", "Millimeters"] {
+        let mut m = model(units);
+        let mesh = json!({"type": "Mesh3D", "vertices": [
+            pt([1000, 2000, 800], units), pt([3000, 2000, 800], units),
+            pt([3000, 4000, 800], units), pt([1000, 4000, 800], units),
+            pt([1000, 0, 800], units)],
+            "faces": [[0, 1, 2, 3], [0, 4, 1]]});
+        m["properties"]["radiance"]["sensor_grids"][0]["mesh"] = mesh;
+        let h = read(&m).unwrap();
+        let a = h.imported.grids[0]
+            .areas
+            .clone()
+            .expect("areas from the mesh");
+        assert_eq!(a.len(), 2);
+        assert!(
+            (a[0] - 4.0).abs() < 1e-9 && (a[1] - 2.0).abs() < 1e-9,
+            "{units}: {a:?}"
+        );
+    }
+    // A mesh with another face count than sensors: no areas, and a warning says so.
+    let mut m = model("Meters");
+    m["properties"]["radiance"]["sensor_grids"][0]["mesh"] = json!({"type": "Mesh3D", "vertices": [[0, 0, 0], [1, 0, 0], [0, 1, 0]],
+               "faces": [[0, 1, 2]]});
+    let h = read(&m).unwrap();
+    assert_eq!(h.imported.grids[0].areas, None);
+    assert!(
+        h.warnings
+            .iter()
+            .any(|w| w.contains("1 faces for 2 sensors")),
+        "{:?}",
+        h.warnings
+    );
+}

@@ -14,6 +14,9 @@ pub struct GridInfo {
     pub room: Option<String>,
     /// Number of sensors in the grid.
     pub sensors: usize,
+    /// Area of each sensor's cell, m², from the grid's mesh (one face per sensor), when it
+    /// has one: LEED and EN 17037 then weight by area, as honeybee does.
+    pub areas: Option<Vec<f64>>,
 }
 
 /// A named view of the model (honeybee `View`).

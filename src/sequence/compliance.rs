@@ -65,10 +65,12 @@ pub struct Compliance {
     pub report: ComplianceReport,
 }
 
-/// One grid: name and the sensors (run order).
+/// One grid: name, the sensors (run order) and their cells' areas (m²) when the model
+/// gives them.
 struct Grid {
     name: String,
     sensors: Vec<usize>,
+    areas: Option<Vec<f64>>,
 }
 
 fn grids_of(scene: &Scene) -> Vec<Grid> {
@@ -77,13 +79,24 @@ fn grids_of(scene: &Scene) -> Vec<Grid> {
         return vec![Grid {
             name: export::grids::ALL_SENSORS.into(),
             sensors: (0..scene.sensors.len()).collect(),
+            areas: None,
         }];
     }
     spans
         .into_iter()
-        .map(|s| Grid {
-            name: s.identifier,
-            sensors: s.sensors,
+        .map(|s| {
+            let areas = scene
+                .imported
+                .grids
+                .iter()
+                .find(|g| g.identifier == s.identifier)
+                .and_then(|g| g.areas.clone())
+                .filter(|a| a.len() == s.sensors.len());
+            Grid {
+                name: s.identifier,
+                sensors: s.sensors,
+                areas,
+            }
         })
         .collect()
 }
@@ -270,7 +283,7 @@ pub(super) fn compliance(run: &Run) -> Result<Compliance> {
         .map(|(gi, g)| LeedGrid {
             name: &g.name,
             sensors: g.sensors.len(),
-            areas: None,
+            areas: g.areas.as_deref(),
             paths: paths
                 .iter()
                 .map(|p| LightPath {
@@ -377,7 +390,7 @@ fn en_17037(run: &Run, grids: &[Grid], sun_up: &[usize]) -> Result<En17037Result
         .map(|(g, (t, _))| En17037Grid {
             name: &g.name,
             sensors: g.sensors.len(),
-            areas: None,
+            areas: g.areas.as_deref(),
             total: t,
         })
         .collect();
