@@ -115,16 +115,29 @@ struct PathArrays {
     name: String,
     shade: Option<f64>,
     /// Per grid: (total, direct sun).
-    grids: Vec<(Vec<f32>, Vec<f32>)>,
+    grids: GridArrays,
 }
 
-/// Reads a run folder's total and sun-only values at the sun-up steps.
-fn read_path(
-    dir: &Path,
+/// Per grid: (total, direct sun) at the sun-up steps, hour-major f32 lux.
+type GridArrays = Vec<(Vec<f32>, Vec<f32>)>;
+
+/// The run's own values, read from `out` the first time they are needed (LEED's static or
+/// scene-wide path and EN 17037 share one read).
+fn own<'c>(
+    cache: &'c mut Option<GridArrays>,
+    out: &Path,
     grids: &[Grid],
     sun_up: &[usize],
     steps: usize,
-) -> Result<Vec<(Vec<f32>, Vec<f32>)>> {
+) -> Result<&'c GridArrays> {
+    if cache.is_none() {
+        *cache = Some(read_path(out, grids, sun_up, steps)?);
+    }
+    Ok(cache.as_ref().expect("just read"))
+}
+
+/// Reads a run folder's total and sun-only values at the sun-up steps.
+fn read_path(dir: &Path, grids: &[Grid], sun_up: &[usize], steps: usize) -> Result<GridArrays> {
     let read = |f: &str| -> Result<Vec<Vec<f64>>> {
         let p = dir.join(f);
         let (times, rows) = export::read_illuminance_csv(&p)?;
@@ -187,8 +200,10 @@ pub(super) fn compliance(run: &Run) -> Result<Compliance> {
         .map(|(i, _)| i)
         .collect();
     c.report.sun_up_steps = sun_up.len();
+    let mut run_values: Option<GridArrays> = None;
     if opts.en17037 {
-        c.en17037 = Some(en_17037(run, &grids, &sun_up)?);
+        let values = own(&mut run_values, out, &grids, &sun_up, steps)?;
+        c.en17037 = Some(en_17037(run, &grids, &sun_up, values)?);
     }
     if !opts.leed {
         return Ok(c);
@@ -200,7 +215,7 @@ pub(super) fn compliance(run: &Run) -> Result<Compliance> {
         paths.push(PathArrays {
             name: STATIC_PATH.into(),
             shade: None,
-            grids: read_path(out, &grids, &sun_up, steps)?,
+            grids: own(&mut run_values, out, &grids, &sun_up, steps)?.clone(),
         });
     } else {
         let of = triangle_groups(scene);
@@ -229,7 +244,7 @@ pub(super) fn compliance(run: &Run) -> Result<Compliance> {
                 paths.push(PathArrays {
                     name,
                     shade,
-                    grids: read_path(out, &grids, &sun_up, steps)?,
+                    grids: own(&mut run_values, out, &grids, &sun_up, steps)?.clone(),
                 });
                 continue;
             };
@@ -366,7 +381,12 @@ pub(super) fn check(weather: &Weather, opts: &AnnualOptions, steps: usize) -> Re
 }
 
 /// EN 17037 daylight provision of the run's totals.
-fn en_17037(run: &Run, grids: &[Grid], sun_up: &[usize]) -> Result<En17037Result> {
+fn en_17037(
+    run: &Run,
+    grids: &[Grid],
+    sun_up: &[usize],
+    total: &GridArrays,
+) -> Result<En17037Result> {
     let w = run.weather;
     check(w, run.opts, run.plan.len())?;
     let from_lux = w
@@ -383,10 +403,9 @@ fn en_17037(run: &Run, grids: &[Grid], sun_up: &[usize]) -> Result<En17037Result
         .collect();
     let daylight_all = en17037::daylight_hours(&series)?;
     let daylight: Vec<bool> = sun_up.iter().map(|&i| daylight_all[i]).collect();
-    let total = read_path(run.out, grids, sun_up, run.plan.len())?;
     let en_grids: Vec<En17037Grid> = grids
         .iter()
-        .zip(&total)
+        .zip(total)
         .map(|(g, (t, _))| En17037Grid {
             name: &g.name,
             sensors: g.sensors.len(),

@@ -18,6 +18,7 @@ pub mod direct;
 pub mod coefficients;
 pub mod estimate;
 pub mod step;
+pub mod step_types;
 pub mod instant;
 pub mod df;
 pub mod convergence;

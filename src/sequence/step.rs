@@ -36,67 +36,13 @@ use crate::site::solar_position::solar_position;
 use crate::sky::Sky;
 use crate::sources::{Source, SourceKey};
 use crate::trace::Tracer;
-use crate::transfer::{self, DirectIrradiance};
-use chrono::{DateTime, Datelike, NaiveDateTime, Utc};
+use crate::transfer;
+use chrono::Datelike;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-/// What a run asks of its steps besides sensor values.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct EngineOptions {
-    /// Per-group surface irradiance and transmitted power (`surfaces.csv`): needs the mesh
-    /// solution, so every step solves forward.
-    pub surfaces: bool,
-    /// Memory allowed for adjoint sensor responses while daylight coefficients are
-    /// computed ([`Engine::prepare`]), bytes.
-    pub response_max_bytes: u64,
-    /// Do not read or build the interreflection operator in [`Engine::new`]:
-    /// [`Engine::prepare`] reads it only when some daylight coefficients are missing (a
-    /// warm annual run never needs it), or when the steps will solve forward after all.
-    pub defer_operator: bool,
-    /// Every step's mesh solution is wanted (renders gather from it): the operator is
-    /// built even without sensors, and steps solve forward.
-    pub mesh_solution: bool,
-    /// Only the values, no error estimate: daylight-coefficient steps skip the coarser
-    /// level (its sources, sun and sky responses), so `lux_err` is not stated. The light
-    /// paths of `annual --leed`, whose run states the error.
-    pub values_only: bool,
-}
-
-/// When a step is: the instant in UTC and the site's local standard time.
-#[derive(Clone, Copy, Debug)]
-pub struct StepTime {
-    /// The instant, UTC.
-    pub utc: DateTime<Utc>,
-    /// Local standard time of the site (day of year for the sky models).
-    pub local: NaiveDateTime,
-}
-
-/// Everything one step produces.
-pub struct Step {
-    /// Per sensor, in .pts order.
-    pub sensors: Vec<SensorValue>,
-    /// The interreflection solution, to warm-start the next step (forward solves only).
-    pub state: Option<TransportState>,
-    /// Per-group surface values of the step ([`SurfaceMap::values`]; empty unless asked).
-    pub surfaces: Vec<f64>,
-    /// The sky of the step, when [`Engine::step`] built it.
-    pub sky: Option<Sky>,
-    /// The sources used.
-    pub sources: Vec<Source>,
-    /// The refined element hierarchy and each element's direct irradiance, when asked
-    /// (`detail`).
-    pub elements: Option<(Hierarchy, DirectIrradiance)>,
-    /// Per sensor, the stated error of interpolating the sun's interreflected light on
-    /// the sun grid, lux (included in `lux_err`; empty for forward steps).
-    pub sun_interpolation_err: Vec<f64>,
-    /// The step's report: sun, counts, stage times, what was skipped, the solve.
-    pub report: Report,
-    /// Per mesh row, the direct irradiance (RGB W/m²) the solve started from, when
-    /// [`EngineOptions::mesh_solution`] asked for the mesh solution (else empty).
-    pub mesh_direct: Vec<Rgb>,
-}
+pub use super::step_types::{EngineOptions, Step, StepTime};
 
 /// What stage 5 yields: the sensors' interreflected light, the solution for the next
 /// step's warm start (forward solves), and the surface output when asked.
