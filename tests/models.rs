@@ -7,7 +7,6 @@ use crate::util::*;
 use daystep::scene::Scene;
 use glam::DVec3;
 use serde_json::{json, Value};
-use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
 fn face(id: &str, kind: &str, bc: &str, boundary: Value) -> Value {
@@ -144,23 +143,7 @@ fn uniform_sky_through_a_honeybee_roof_hole_matches_the_configuration_factor() {
     let dir = tempfile::tempdir().unwrap();
     let (m, _) = write(dir.path(), &roof_opening(1.0, "Meters", 1.0), None);
     let scene = Scene::load(&m).unwrap();
-    let l = 10.0;
-    let r = run(
-        &scene,
-        &sky_of(Some(Box::new(Uniform(l))), None, 0.0),
-        &daystep::sequence::Quality::default(),
-    );
-    // The opening seen from the floor below its centre: F = 4·F(0.5, 0.5, 3).
-    let expected = lux_of(PI * l * 4.0 * f_parallel(0.5, 0.5, 3.0));
-    let got = r.sensors[0];
-    assert_close("under the opening", got.lux, expected, 0.02 * expected);
-    // Off-centre, the sensor at (2, 2, 0.8) sees the opening obliquely: less light.
-    assert!(
-        r.sensors[1].lux < got.lux,
-        "{} vs {}",
-        r.sensors[1].lux,
-        got.lux
-    );
+    assert_roof_opening_configuration_factor(&scene);
 }
 
 #[test]

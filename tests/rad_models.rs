@@ -12,7 +12,6 @@ use crate::util::*;
 use daystep::scene::{rad, Scene};
 use proptest::prelude::*;
 use std::collections::BTreeMap;
-use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
 fn honeybee(name: &str) -> PathBuf {
@@ -147,21 +146,7 @@ fn uniform_sky_through_a_rad_roof_hole_matches_the_configuration_factor() {
         .iter()
         .filter(|t| t.group == roof)
         .all(|t| t.normal().z > 0.999));
-    let l = 10.0;
-    let r = run(
-        &scene,
-        &sky_of(Some(Box::new(Uniform(l))), None, 0.0),
-        &daystep::sequence::Quality::default(),
-    );
-    // The opening seen from the floor below its centre: F = 4·F(0.5, 0.5, 3).
-    let expected = lux_of(PI * l * 4.0 * f_parallel(0.5, 0.5, 3.0));
-    assert_close(
-        "under the opening",
-        r.sensors[0].lux,
-        expected,
-        0.02 * expected,
-    );
-    assert!(r.sensors[1].lux < r.sensors[0].lux);
+    assert_roof_opening_configuration_factor(&scene);
 }
 
 #[test]

@@ -30,22 +30,11 @@ fn near(a: DVec3, b: DVec3) -> bool {
     (a - b).length() < 1e-12
 }
 
+/// The line and the shown message of the input error `text` gives, which must name `t.rad`.
 fn err_of(text: &str) -> (usize, String) {
-    match parse(&p(), text).unwrap_err() {
-        Error::Input {
-            path,
-            line,
-            value,
-            message,
-        } => {
-            assert_eq!(path, p());
-            (
-                line.expect("a line"),
-                format!("{} {message}", value.unwrap_or_default()),
-            )
-        }
-        e => panic!("not an input error: {e}"),
-    }
+    let (shown, path, line, _) = crate::error::input_parts(parse(&p(), text).unwrap_err());
+    assert_eq!(path, p());
+    (line.expect("a line"), shown)
 }
 
 const GREY: &str = "void plastic grey 0 0 5 0.5 0.5 0.5 0 0\n";

@@ -160,6 +160,24 @@ pub fn assert_close(what: &str, actual: f64, expected: f64, tol: f64) {
     );
 }
 
+/// A uniform sky through the 1 m × 1 m roof opening 3 m above sensor 0 of the roof-hole
+/// boxes (read from HBJSON and from `.rad`): sensor 0 reads πL · 4·F(0.5, 0.5, 3) within
+/// 2 %, and sensor 1, which sees the opening obliquely, less.
+#[track_caller]
+pub fn assert_roof_opening_configuration_factor(scene: &Scene) {
+    let l = 10.0;
+    let r = run(
+        scene,
+        &sky_of(Some(Box::new(Uniform(l))), None, 0.0),
+        &Quality::default(),
+    );
+    // The opening seen from the floor below its centre: F = 4·F(0.5, 0.5, 3).
+    let expected = lux_of(std::f64::consts::PI * l * 4.0 * f_parallel(0.5, 0.5, 3.0));
+    let got = r.sensors[0].lux;
+    assert_close("under the opening", got, expected, 0.02 * expected);
+    assert!(r.sensors[1].lux < got, "{} vs {got}", r.sensors[1].lux);
+}
+
 /// Configuration factor of a parallel rectangle a × b at height h with one corner above
 /// the point (docs/derivations.md, "Configuration factor: point to a parallel rectangle").
 pub fn f_parallel(a: f64, b: f64, h: f64) -> f64 {
