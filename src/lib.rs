@@ -30,7 +30,7 @@
 //! W/m²; illuminance lux = 179 × (0.265 R + 0.670 G + 0.065 B).
 //!
 //! Layers (a module uses only lower layers; `tests/layers.rs` checks it):
-//! L0 error, files, math, photometry · L1 site, scene, weather (scene and weather may use
+//! L0 error, files, math, photometry, memory · L1 site, scene, weather (scene and weather may use
 //! site) · L2 sky, sources · L3 hierarchy · L4 projection · L5 transfer, cache, trace ·
 //! L6 sensors, radiosity · L7 metrics, export, render (export may use metrics) · L8 sequence · L9 cli.
 #![warn(missing_docs)]
@@ -43,6 +43,7 @@ pub mod error; // Error enum: input errors name file, line, value
 pub mod files; // atomic writes, text reads with paths
 pub mod math; // frames, spherical triangles, rasteriser, BVH, counter-based RNG
 pub mod photometry; // RGB ↔ lux at 179 lm/W
+pub mod memory; // the memory cap (--max-memory), resident memory from /proc
 
 // L1 inputs
 pub mod scene; // scene.toml, OBJ/MTL, .pts, a builder for scenes in code

@@ -116,14 +116,17 @@ fn daylight_coefficients_equal_forward_solves_within_their_stated_errors() {
     let store = Store::disabled();
     let opts = EngineOptions {
         surfaces: false,
-        response_max_bytes: 64 << 20,
+        max_memory_bytes: 0,
         defer_operator: false,
         mesh_solution: false,
         values_only: false,
     };
     let forward = Engine::new(&scene, &q, &store, &opts);
     let mut dc = Engine::new(&scene, &q, &store, &opts);
-    assert!(dc.prepare(&steps), "the office takes daylight coefficients");
+    assert!(
+        dc.prepare(&steps).unwrap(),
+        "the office takes daylight coefficients"
+    );
     assert_eq!(forward.interreflection(), "forward");
     assert_eq!(dc.interreflection(), "daylight coefficients");
 

@@ -10,7 +10,7 @@ use std::path::Path;
 /// The top-level modules of `src/` by layer, lowest first (lib.rs's table). A new module
 /// goes into its layer's list.
 const LAYERS: &[&[&str]] = &[
-    &["error", "files", "math", "photometry"],
+    &["error", "files", "math", "photometry", "memory"],
     &["site", "scene", "weather"],
     &["sky", "sources"],
     &["hierarchy"],
@@ -27,6 +27,7 @@ const SIBLINGS: &[(&str, &str)] = &[
     ("files", "error"),
     ("math", "error"),
     ("photometry", "error"),
+    ("memory", "error"),
     ("scene", "site"),
     ("weather", "site"),
     ("export", "metrics"),

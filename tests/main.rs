@@ -17,6 +17,7 @@ mod imagesky; // HDR image skies: uniform image πL, images of the CIE overcast 
 mod generated_scenes; // the generated office and building: areas, normals, closure, triangle target, bundled files
 mod leed; // annual --leed: light paths of two aperture groups sum to the room, the 2 % rule, DA from paths and schedule; EN 17037 needs a whole year
 mod layers; // the layer rule of lib.rs: lower layers never import higher ones
+mod memory; // --max-memory: refused before the work naming the smallest cap, same bytes at that cap, reported
 mod model_outputs; // a Honeybee model through the binary: grid column, --grids, per-grid annual outputs, --view-name
 mod models; // Honeybee HBJSON: as geometry and as SCENE, grids as sensors, mm = m, sky through a roof hole, exit 1 naming the object
 mod outputs; // outputs checked before the work; a resumed render keeps only frames of the same inputs

@@ -77,6 +77,7 @@ fn render_into(dir: &Path, i: &Inputs) -> RenderReport {
     };
     let frames = [FramePlan::new(at, SkySpec::CieOvercast { dhi: i.dhi })];
     let outputs = RenderOutputs {
+        max_memory: None,
         png: Some(daystep::render::tonemap::Exposure::Auto),
         falsecolor: i
             .falsecolor

@@ -340,6 +340,7 @@ fn a_sequence_interrupted_and_resumed_gives_identical_files() {
         },
     };
     let outputs = RenderOutputs {
+        max_memory: None,
         png: Some(daystep::render::tonemap::Exposure::Auto),
         falsecolor: Some(daystep::render::falsecolor::Falsecolor::default()),
         command: "test".into(),
@@ -477,6 +478,7 @@ fn the_gltf_holds_every_frame_and_a_plane_reads_its_closed_form() {
         options: small(Quantity::Radiance),
     };
     let outputs = RenderOutputs {
+        max_memory: None,
         gltf: Some(glb.clone()),
         command: "test".into(),
         ..RenderOutputs::default()

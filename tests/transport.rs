@@ -321,6 +321,85 @@ fn adjoint_responses_equal_the_forward_solve() {
 }
 
 #[test]
+fn grey_daylight_coefficients_solve_one_channel_and_equal_the_forward_solve() {
+    // The same room grey and coloured: the grey operator's adjoint keeps one channel (a
+    // third of the bytes), and both give the forward solve's illuminance within the
+    // iteration tolerance, whatever the sensor blocking.
+    let room = |kd: Rgb| {
+        let mut b = Builder::new();
+        let m = b.material("all", 0.6, 0.0);
+        b.input.materials[m as usize].kd = kd;
+        b.hrect(0.0, 4.0, 0.0, 4.0, 0.0, true, m);
+        b.hrect(0.0, 4.0, 0.0, 4.0, 4.0, false, m);
+        b.walls_inward(0.0, 4.0, 0.0, 4.0, 0.0, 4.0, m);
+        for i in 0..40 {
+            let f = i as f64 / 40.0;
+            b.sensor(DVec3::new(0.3 + 3.4 * f, 0.5 + 3.0 * f * f, 0.8), DVec3::Z);
+        }
+        b.build()
+    };
+    let grey = room(Rgb::splat(0.6));
+    let coloured = room(Rgb::new(0.7, 0.5, 0.2));
+    let tg = Transport::build(&grey, &grey.sensors, &small());
+    let tc = Transport::build(&coloured, &coloured.sensors, &small());
+    assert!(tg.is_grey());
+    assert!(!tc.is_grey());
+    assert_eq!(tg.rows(), tc.rows());
+    assert_eq!(
+        3 * tg.adjoint_bytes_per_sensor(),
+        tc.adjoint_bytes_per_sensor()
+    );
+    for (t, name) in [(&tg, "grey"), (&tc, "coloured")] {
+        let light = floor_light(t, 100.0);
+        let (st, _) = t.solve(&light, None);
+        let forward = t.sensors(&st);
+        let weights: Vec<(u32, Rgb)> = light
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (i as u32, *v / 100.0))
+            .collect();
+        let k = forward.len();
+        let whole = t.adjoint_block(0..k).apply(t, &weights);
+        // Blocks of 32 and the rest: bit-identical values.
+        let (a, b) = (t.adjoint_block(0..32), t.adjoint_block(32..k));
+        let (va, vb) = (a.apply(t, &weights), b.apply(t, &weights));
+        let parts = whole.len() / k - 1;
+        for row in 0..=parts {
+            for s in 0..k {
+                let split = if s < 32 {
+                    va[row * 32 + s]
+                } else {
+                    vb[row * (k - 32) + s - 32]
+                };
+                assert_eq!(
+                    whole[row * k + s].to_bits(),
+                    split.to_bits(),
+                    "{name} {row} {s}"
+                );
+            }
+        }
+        // Many directions at once: each one's bytes as alone (here the floor's light and
+        // the same light on half the floor).
+        let half: Vec<(u32, Rgb)> = weights.iter().step_by(2).copied().collect();
+        let terms = [t.direction_terms(&half), t.direction_terms(&weights)];
+        let block = t.adjoint_block(0..k);
+        let many = block.apply_many(t, &terms);
+        assert_eq!(many[1], whole, "{name}");
+        assert_eq!(many[0], block.apply(t, &half), "{name}");
+        assert_ne!(many[0], many[1], "{name}");
+        for (s, f) in forward.iter().enumerate() {
+            let adj =
+                100.0 * (0..parts).map(|p| whole[p * k + s] as f64).sum::<f64>() / parts as f64;
+            let fwd = daystep::photometry::lux(f.irradiance);
+            assert!(
+                (adj - fwd).abs() <= 4.0 * t.params.tolerance * fwd + 1e-6,
+                "{name} sensor {s}: adjoint {adj} forward {fwd}"
+            );
+        }
+    }
+}
+
+#[test]
 fn emitter_under_a_pane_sees_its_mirror_image() {
     // A large black emitter (exitance B = π Ke) facing up at z = 0 and a glazing pane of
     // Tn = 0.88 at z = h above it, nothing beyond: a surface just above the emitter

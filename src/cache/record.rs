@@ -203,6 +203,65 @@ fn pad8(n: usize) -> usize {
 /// On caller bugs: an element size of 0, a byte length that is not a multiple of the
 /// element size, two sections with one tag, more than [`MAX_SECTIONS`] sections.
 pub fn encode(key: &RecordKey, sections: &[Section<'_>]) -> Vec<u8> {
+    let mut out = Vec::new();
+    write_record(&mut out, key, sections).expect("writing to memory cannot fail");
+    out
+}
+
+/// Writes the record [`encode`] makes to `w`, without holding it in memory: the header
+/// (its payload checksum hashed over the sections where they lie), then each section.
+/// Returns the bytes written. For records as large as the interreflection operator,
+/// which would otherwise be copied whole before being written.
+///
+/// # Errors
+/// What `w` returns.
+///
+/// # Panics
+/// As [`encode`].
+pub fn write_record(
+    w: &mut impl std::io::Write,
+    key: &RecordKey,
+    sections: &[Section<'_>],
+) -> std::io::Result<u64> {
+    check_sections(sections);
+    let h = header_len(sections.len());
+    let payload: usize = sections.iter().map(|s| pad8(s.bytes.len())).sum();
+    let mut out = vec![0u8; h];
+    out[..8].copy_from_slice(&MAGIC);
+    out[8..12].copy_from_slice(&FORMAT_VERSION.to_le_bytes());
+    out[12..16].copy_from_slice(&(h as u32).to_le_bytes());
+    out[16..64].copy_from_slice(&key.to_bytes());
+    out[64] = HOST_BYTE_ORDER;
+    out[68..72].copy_from_slice(&(sections.len() as u32).to_le_bytes());
+    out[72..80].copy_from_slice(&(payload as u64).to_le_bytes());
+    let mut offset = h;
+    let mut hasher = blake3::Hasher::new();
+    let zeros = [0u8; 8];
+    for (i, s) in sections.iter().enumerate() {
+        let e = FIXED_HEADER_BYTES + SECTION_ENTRY_BYTES * i;
+        let count = (s.bytes.len() / s.elem_size as usize) as u64;
+        out[e..e + 4].copy_from_slice(&s.tag.to_le_bytes());
+        out[e + 4..e + 8].copy_from_slice(&s.elem_size.to_le_bytes());
+        out[e + 8..e + 16].copy_from_slice(&count.to_le_bytes());
+        out[e + 16..e + 24].copy_from_slice(&(offset as u64).to_le_bytes());
+        hasher.update(s.bytes);
+        hasher.update(&zeros[..pad8(s.bytes.len()) - s.bytes.len()]);
+        offset += pad8(s.bytes.len());
+    }
+    out[80..112].copy_from_slice(hasher.finalize().as_bytes());
+    let sum_at = h - CHECKSUM_BYTES;
+    let header_sum = *blake3::hash(&out[..sum_at]).as_bytes();
+    out[sum_at..h].copy_from_slice(&header_sum);
+    w.write_all(&out)?;
+    for s in sections {
+        w.write_all(s.bytes)?;
+        w.write_all(&zeros[..pad8(s.bytes.len()) - s.bytes.len()])?;
+    }
+    Ok((h + payload) as u64)
+}
+
+/// The caller-bug checks of [`encode`].
+fn check_sections(sections: &[Section<'_>]) {
     assert!(sections.len() <= MAX_SECTIONS as usize, "too many sections");
     for (i, s) in sections.iter().enumerate() {
         assert!(s.elem_size > 0, "section {} has element size 0", s.tag);
@@ -219,33 +278,6 @@ pub fn encode(key: &RecordKey, sections: &[Section<'_>]) -> Vec<u8> {
             s.tag
         );
     }
-    let h = header_len(sections.len());
-    let payload: usize = sections.iter().map(|s| pad8(s.bytes.len())).sum();
-    let mut out = vec![0u8; h + payload];
-    out[..8].copy_from_slice(&MAGIC);
-    out[8..12].copy_from_slice(&FORMAT_VERSION.to_le_bytes());
-    out[12..16].copy_from_slice(&(h as u32).to_le_bytes());
-    out[16..64].copy_from_slice(&key.to_bytes());
-    out[64] = HOST_BYTE_ORDER;
-    out[68..72].copy_from_slice(&(sections.len() as u32).to_le_bytes());
-    out[72..80].copy_from_slice(&(payload as u64).to_le_bytes());
-    let mut offset = h;
-    for (i, s) in sections.iter().enumerate() {
-        let e = FIXED_HEADER_BYTES + SECTION_ENTRY_BYTES * i;
-        let count = (s.bytes.len() / s.elem_size as usize) as u64;
-        out[e..e + 4].copy_from_slice(&s.tag.to_le_bytes());
-        out[e + 4..e + 8].copy_from_slice(&s.elem_size.to_le_bytes());
-        out[e + 8..e + 16].copy_from_slice(&count.to_le_bytes());
-        out[e + 16..e + 24].copy_from_slice(&(offset as u64).to_le_bytes());
-        out[offset..offset + s.bytes.len()].copy_from_slice(s.bytes);
-        offset += pad8(s.bytes.len());
-    }
-    let payload_sum = *blake3::hash(&out[h..]).as_bytes();
-    out[80..112].copy_from_slice(&payload_sum);
-    let sum_at = h - CHECKSUM_BYTES;
-    let header_sum = *blake3::hash(&out[..sum_at]).as_bytes();
-    out[sum_at..h].copy_from_slice(&header_sum);
-    out
 }
 
 fn u32_at(b: &[u8], at: usize) -> u32 {

@@ -271,19 +271,37 @@ impl Store {
     /// warning and a `write_failures` count, never an error. Not synced to disk: a record
     /// cut short by a power failure fails validation and is rebuilt. May evict old records.
     pub fn put(&self, key: &RecordKey, bytes: &[u8]) {
+        self.put_with(key, |f| f.write_all(bytes).map(|()| bytes.len() as u64));
+    }
+
+    /// As [`Self::put`] for a record given as its sections, written to the file as they
+    /// lie ([`super::record::write_record`]) rather than encoded in memory first: what a
+    /// record of hundreds of megabytes (the interreflection operator) needs.
+    pub fn put_sections(&self, key: &RecordKey, sections: &[super::record::Section<'_>]) {
+        self.put_with(key, |f| {
+            let mut w = std::io::BufWriter::with_capacity(1 << 20, f);
+            let n = super::record::write_record(&mut w, key, sections)?;
+            w.flush()?;
+            Ok(n)
+        });
+    }
+
+    /// Writes a record through `write` (which returns the bytes it wrote) to a temporary
+    /// file, then renames it into place.
+    fn put_with(&self, key: &RecordKey, write: impl FnOnce(&mut fs::File) -> std::io::Result<u64>) {
         let Some(dir) = &self.dir else { return };
         let name = key.file_name();
         let tmp = dir.join(self.temp_name(&name));
         let result = (|| {
             let mut f = OpenOptions::new().write(true).create_new(true).open(&tmp)?;
-            f.write_all(bytes)?;
+            let n = write(&mut f)?;
             f.set_modified(SystemTime::now())?;
             drop(f);
-            fs::rename(&tmp, dir.join(&name))
+            fs::rename(&tmp, dir.join(&name))?;
+            Ok::<u64, std::io::Error>(n)
         })();
         match result {
-            Ok(()) => {
-                let n = bytes.len() as u64;
+            Ok(n) => {
                 self.writes.fetch_add(1, Relaxed);
                 self.bytes_written.fetch_add(n, Relaxed);
                 if self.tracked_bytes.fetch_add(n, Relaxed) + n > self.max_bytes {

@@ -5,6 +5,7 @@ use super::args::AnnualArgs;
 use super::config;
 use super::messages::{note, warnings};
 use crate::error::{Error, Result};
+use crate::memory::MemoryCap;
 use crate::sequence::annual::{AnnualOptions, RunControl};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -50,7 +51,7 @@ pub(super) fn show_progress(bar: Option<&indicatif::ProgressBar>, done: usize, t
 /// # Errors
 /// Bad arguments, scene or weather file ([`Error::Input`]), unwritable output;
 /// [`Error::Interrupted`] after Ctrl-C, once the finished days are written.
-pub fn run(a: AnnualArgs) -> Result<()> {
+pub fn run(a: AnnualArgs, cap: &MemoryCap) -> Result<()> {
     let q = config::quality(&a.quality, a.seed)?;
     let shard = config::shard(a.shard.as_deref())?;
     let mut scene = crate::scene::Scene::load(&a.scene)?;
@@ -78,6 +79,7 @@ pub fn run(a: AnnualArgs) -> Result<()> {
         leed: a.leed,
         en17037: a.en17037,
         daylight_coefficients: !a.forward,
+        max_memory: Some(cap.clone()),
         ..AnnualOptions::default()
     };
     opts.metrics.validate()?;

@@ -25,6 +25,12 @@ pub struct Cli {
     /// Worker threads (default: all cores), 1..4096. Results do not depend on it.
     #[arg(long, global = true, value_parser = whole(1usize, MAX_THREADS, ""))]
     pub threads: Option<usize>,
+    /// Resident memory the run may use: 4G, 800M, 1.5G (binary units, as Slurm's --mem).
+    /// Default: 80 % of the machine's available memory (or of the cgroup's limit). Stages
+    /// size their blocks to it; results do not depend on it. A run that cannot fit stops
+    /// before its work, naming the smallest cap it needs.
+    #[arg(long, global = true, value_name = "SIZE", allow_hyphen_values = true)]
+    pub max_memory: Option<String>,
 }
 
 /// Sky models for `--sky`.

@@ -4,6 +4,7 @@ use super::args::{InstantArgs, SkyArg};
 use super::config;
 use super::messages::{note, warnings};
 use crate::error::Result;
+use crate::memory::MemoryCap;
 use crate::sequence;
 
 /// Runs `daystep instant`: writes `sensors.csv` and `report.json` into `--out` and
@@ -11,7 +12,7 @@ use crate::sequence;
 ///
 /// # Errors
 /// Bad arguments or scene ([`crate::Error::Input`]), unwritable output.
-pub fn run(a: InstantArgs) -> Result<()> {
+pub fn run(a: InstantArgs, cap: &MemoryCap) -> Result<()> {
     let q = config::quality(&a.run.quality, a.run.seed)?;
     // The sky's flags are checked before the scene is read (an image sky reads its file
     // once the scene's ground reflectance is known).
@@ -25,9 +26,10 @@ pub fn run(a: InstantArgs) -> Result<()> {
     let store = config::store(&a.run.cache, a.run.no_cache);
     let opts = sequence::EngineOptions {
         mesh_solution: a.gltf.is_some(),
+        max_memory_bytes: cap.bytes,
         ..sequence::EngineOptions::default()
     };
-    let result = if a.sky == SkyArg::Image {
+    let mut result = if a.sky == SkyArg::Image {
         let sky = config::image_sky(&a.params, scene.ground_reflectance)?;
         let mut report = sequence::Report {
             version: env!("CARGO_PKG_VERSION").into(),
@@ -56,6 +58,9 @@ pub fn run(a: InstantArgs) -> Result<()> {
             ]);
         }
     }
+    result.report.memory = Some(sequence::report::MemoryReport::of(
+        cap.bytes, &cap.from, None,
+    ));
     sequence::write_instant(&scene, &result, &a.out)?;
     let r = &result.report;
     warnings(&r.warnings);

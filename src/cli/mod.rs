@@ -39,12 +39,14 @@ use clap::Parser;
 /// # Errors
 /// Any library error, to be mapped to an exit code.
 pub fn run(cli: Cli) -> Result<()> {
+    // Read (and checked) before any work, for every command.
+    let cap = crate::memory::MemoryCap::from_arg(cli.max_memory.as_deref())?;
     match cli.command {
-        Command::Instant(a) => instant::run(a),
-        Command::Df(a) => df::run(a),
+        Command::Instant(a) => instant::run(a, &cap),
+        Command::Df(a) => df::run(a, &cap),
         Command::Convergence(a) => convergence::run(a),
-        Command::Annual(a) => annual::run(a),
-        Command::Render(a) => render::run(*a),
+        Command::Annual(a) => annual::run(a, &cap),
+        Command::Render(a) => render::run(*a, &cap),
         Command::Merge(a) => merge::run(a),
         Command::View(a) => view::run(a),
         Command::Cache { action } => cache::run(action),

@@ -4,6 +4,7 @@ use super::args::{RenderArgs, SkyArg};
 use super::config;
 use super::messages::{note, warnings};
 use crate::error::{Error, Result};
+use crate::memory::MemoryCap;
 use crate::render::falsecolor::Falsecolor;
 use crate::render::glare::{GlareOptions, Threshold};
 use crate::render::{Quantity, RenderOptions};
@@ -60,7 +61,7 @@ fn view(a: &RenderArgs, scene: Option<&Scene>) -> Result<View> {
 /// # Errors
 /// Bad arguments, view, scene or weather ([`Error::Input`]), unwritable output;
 /// [`Error::Interrupted`] after Ctrl-C, once the finished frames are written.
-pub fn run(a: RenderArgs) -> Result<()> {
+pub fn run(a: RenderArgs, cap: &MemoryCap) -> Result<()> {
     let q = config::quality(&a.run.quality, a.run.seed)?;
     // Every number of the flags was checked when they were parsed; the image's area and
     // the camera are checked here, before the scene is read (a named view once it is).
@@ -151,6 +152,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         }
     };
     let outputs = RenderOutputs {
+        max_memory: Some(cap.clone()),
         png: Some(a.exposure),
         falsecolor: a.falsecolor.then(|| Falsecolor {
             scale_max: a.scale,

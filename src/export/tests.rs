@@ -47,6 +47,17 @@ fn illuminance_csv_reads_back_and_names_bad_lines() {
     let (got_times, got_rows) = read_illuminance_csv(&p).unwrap();
     assert_eq!(got_times, ["2021-01-01T00:30:00", "2021-01-01T01:30:00"]);
     assert_eq!(got_rows, [vec![0.0, 12.346], vec![0.0, 1000.0]]);
+    // Row by row: the same times and values.
+    let streamed = |p: &Path| -> crate::error::Result<(Vec<String>, Vec<Vec<f64>>)> {
+        let mut r = IlluminanceRows::open(p)?;
+        let (mut ts, mut rs, mut v) = (Vec::new(), Vec::new(), Vec::new());
+        while let Some(t) = r.next_row(&mut v)? {
+            ts.push(t);
+            rs.push(v.clone());
+        }
+        Ok((ts, rs))
+    };
+    assert_eq!(streamed(&p).unwrap(), (got_times, got_rows));
 
     for (text, line, value) in [
         (
@@ -64,12 +75,17 @@ fn illuminance_csv_reads_back_and_names_bad_lines() {
         ("when,s0\n", 1, "when,s0"),
     ] {
         std::fs::write(&p, text).unwrap();
-        let (shown, path, got_line, got_value) = input_parts(read_illuminance_csv(&p).unwrap_err());
-        assert_eq!(
-            (path.as_path(), got_line, got_value.as_deref()),
-            (p.as_path(), Some(line), Some(value)),
-            "{shown}"
-        );
+        for err in [
+            read_illuminance_csv(&p).unwrap_err(),
+            streamed(&p).unwrap_err(),
+        ] {
+            let (shown, path, got_line, got_value) = input_parts(err);
+            assert_eq!(
+                (path.as_path(), got_line, got_value.as_deref()),
+                (p.as_path(), Some(line), Some(value)),
+                "{shown}"
+            );
+        }
     }
 }
 

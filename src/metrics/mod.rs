@@ -163,46 +163,87 @@ pub fn sensor_metrics(
         occupied.len(),
         sun_up.len()
     );
-    let p = params;
-    let (mut occ, mut dark) = (0usize, 0usize);
-    let (mut da, mut below, mut within, mut above, mut ase) =
-        (0usize, 0usize, 0usize, 0usize, 0usize);
-    let (mut cda, mut sum) = (0.0, 0.0);
-    for i in (0..n).filter(|&i| occupied[i]) {
-        occ += 1;
-        if !sun_up[i] {
-            dark += 1;
-            continue;
+    let mut acc = SensorAccumulator::default();
+    for i in 0..n {
+        acc.add(
+            total_lux[i],
+            direct_sun_lux[i],
+            occupied[i],
+            sun_up[i],
+            params,
+        );
+    }
+    acc.finish(hours_per_step)
+}
+
+/// [`sensor_metrics`] one step at a time: the counts and sums of one sensor's series,
+/// taken in time order (so the sums are the same to the bit), without holding the series.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SensorAccumulator {
+    occ: usize,
+    dark: usize,
+    da: usize,
+    below: usize,
+    within: usize,
+    above: usize,
+    ase: usize,
+    cda: f64,
+    sum: f64,
+}
+
+impl SensorAccumulator {
+    /// Adds one step: total and direct-sun illuminance (lux), whether it is occupied and
+    /// whether the sun is up.
+    pub fn add(
+        &mut self,
+        total_lux: f64,
+        direct_sun_lux: f64,
+        occupied: bool,
+        sun_up: bool,
+        p: &MetricParams,
+    ) {
+        if !occupied {
+            return;
         }
-        let e = total_lux[i];
-        sum += e;
-        da += usize::from(e >= p.da_threshold_lux);
-        cda += if e >= p.da_threshold_lux {
+        self.occ += 1;
+        if !sun_up {
+            self.dark += 1;
+            return;
+        }
+        let e = total_lux;
+        self.sum += e;
+        self.da += usize::from(e >= p.da_threshold_lux);
+        self.cda += if e >= p.da_threshold_lux {
             1.0
         } else {
             e / p.da_threshold_lux
         };
-        below += usize::from(e < p.udi_min_lux);
-        within += usize::from(e >= p.udi_min_lux && e <= p.udi_max_lux);
-        above += usize::from(e > p.udi_max_lux);
-        ase += usize::from(direct_sun_lux[i] > p.ase_threshold_lux);
+        self.below += usize::from(e < p.udi_min_lux);
+        self.within += usize::from(e >= p.udi_min_lux && e <= p.udi_max_lux);
+        self.above += usize::from(e > p.udi_max_lux);
+        self.ase += usize::from(direct_sun_lux > p.ase_threshold_lux);
     }
-    let pct = |count: f64| {
-        if occ == 0 {
-            0.0
-        } else {
-            100.0 * count / occ as f64
+
+    /// The metrics of the steps added, each `hours_per_step` long.
+    pub fn finish(&self, hours_per_step: f64) -> SensorMetrics {
+        let occ = self.occ;
+        let pct = |count: f64| {
+            if occ == 0 {
+                0.0
+            } else {
+                100.0 * count / occ as f64
+            }
+        };
+        SensorMetrics {
+            da: pct(self.da as f64),
+            cda: pct(self.cda),
+            udi_below: pct((self.below + self.dark) as f64),
+            udi_within: pct(self.within as f64),
+            udi_above: pct(self.above as f64),
+            ase_hours: self.ase as f64 * hours_per_step,
+            mean_lux: if occ == 0 { 0.0 } else { self.sum / occ as f64 },
+            occupied_hours: occ as f64 * hours_per_step,
         }
-    };
-    SensorMetrics {
-        da: pct(da as f64),
-        cda: pct(cda),
-        udi_below: pct((below + dark) as f64),
-        udi_within: pct(within as f64),
-        udi_above: pct(above as f64),
-        ase_hours: ase as f64 * hours_per_step,
-        mean_lux: if occ == 0 { 0.0 } else { sum / occ as f64 },
-        occupied_hours: occ as f64 * hours_per_step,
     }
 }
 

@@ -74,10 +74,16 @@ pub(super) fn operator(
             })
             .collect()
     };
-    // Each direction: (pair key, fixed-point τ) sorted and merged, plus line counts.
-    let per_dir: Vec<DirectionLines> = (0..n_dirs)
+    // Each direction: (pair key, fixed-point τ) sorted and merged, plus line counts,
+    // folded per worker into one list that is merged again whenever it has doubled: the
+    // pairs of many directions repeat, and holding every direction's list at once took
+    // most of a large scene's memory. Fixed-point sums are exact, so the grouping does
+    // not change a bit of the result.
+    type Acc = (Vec<(u64, [u64; 3])>, Vec<u64>, usize);
+    let fresh = || -> Acc { (Vec::new(), vec![0u64; rows], 0) };
+    let (all, n, _) = (0..n_dirs)
         .into_par_iter()
-        .map(|m| {
+        .fold(fresh, |(mut acc, mut n, mut merged), m| {
             let d = bundle_direction(m, n_dirs, seed);
             let jitter = glam::DVec2::new(
                 uniform(seed, 13, 2 * m as u64),
@@ -96,19 +102,26 @@ pub(super) fn operator(
                 };
                 bundle(pscene, tracer, mesh, pass, &line, &mut pairs, &mut counts);
             }
-            (merge_pairs(pairs), counts)
+            for (t, c) in n.iter_mut().zip(counts) {
+                *t += c as u64;
+            }
+            acc.extend(merge_pairs(pairs));
+            if acc.len() > 2 * merged.max(1 << 16) {
+                acc = merge_pairs(acc);
+                merged = acc.len();
+            }
+            (acc, n, merged)
         })
-        .collect();
-    let mut n = vec![0u64; rows];
-    let mut all: Vec<(u64, [u64; 3])> = Vec::new();
-    for (pairs, counts) in per_dir {
-        for (r, c) in counts.into_iter().enumerate() {
-            n[r] += c as u64;
-        }
-        all.extend(pairs);
-    }
+        .reduce(fresh, |(mut a, mut na, _), (b, nb, _)| {
+            a.extend(b);
+            for (x, y) in na.iter_mut().zip(nb) {
+                *x += y;
+            }
+            let a = merge_pairs(a);
+            let len = a.len();
+            (a, na, len)
+        });
     let lines: u64 = n.iter().sum();
-    let all = merge_pairs(all);
     let entries = all.into_iter().map(|(k, q)| {
         let (r, c) = ((k >> 32) as u32, k as u32);
         let inv = 1.0 / (n[r as usize].max(1) as f64 * FIX);
@@ -296,20 +309,22 @@ impl Mirror<'_> {
 }
 
 /// One bundle's merged (pair key, fixed-point τ) links and per-row line counts.
-type DirectionLines = (Vec<(u64, [u64; 3])>, Vec<u32>);
-
+/// `v` sorted by key with equal keys' values summed, in place.
 fn merge_pairs(mut v: Vec<(u64, [u64; 3])>) -> Vec<(u64, [u64; 3])> {
     v.sort_unstable_by_key(|e| e.0);
-    let mut out: Vec<(u64, [u64; 3])> = Vec::with_capacity(v.len() / 2);
-    for (k, q) in v {
-        match out.last_mut() {
-            Some((lk, lq)) if *lk == k => {
-                for c in 0..3 {
-                    lq[c] += q[c];
-                }
+    let mut w = 0;
+    for i in 0..v.len() {
+        if w > 0 && v[w - 1].0 == v[i].0 {
+            let q = v[i].1;
+            for (a, b) in v[w - 1].1.iter_mut().zip(q) {
+                *a += b;
             }
-            _ => out.push((k, q)),
+        } else {
+            v[w] = v[i];
+            w += 1;
         }
     }
-    out
+    v.truncate(w);
+    v.shrink_to_fit();
+    v
 }

@@ -28,7 +28,10 @@ pub struct AdjointBlock {
     /// Sensors of the block.
     pub sensors: std::ops::Range<usize>,
     parts: usize,
-    /// Per (part, level, sub-block of [`BLOCK`]): its first sensor and X (rows × 3 × width).
+    /// Channels of X: 3, or 1 for a grey operator ([`Transport::is_grey`]).
+    channels: usize,
+    /// Per (part, level, sub-block of [`BLOCK`]): its first sensor and X (rows × channels
+    /// × width).
     x: Vec<(usize, usize, usize, Vec<f32>)>,
     /// Gauss–Seidel sweeps, summed over the block's systems.
     pub sweeps: u64,
@@ -41,9 +44,53 @@ pub struct AdjointBlock {
 type Terms = (Vec<(u32, [f32; 3])>, Vec<(u32, [f32; 3])>);
 
 impl Transport {
+    /// Whether every reflectance and every operator entry (line transfer F and sensor
+    /// gather G, both levels) is grey: the three colour channels' adjoint systems are then
+    /// one, and the daylight coefficients solve it once (a third of the memory and time).
+    pub fn is_grey(&self) -> bool {
+        let grey_rgb = |v: &Rgb| v.x == v.y && v.y == v.z;
+        let grey_sparse =
+            |s: &super::sparse::Sparse| s.vals.iter().all(|v| v[0] == v[1] && v[1] == v[2]);
+        self.rho.iter().all(grey_rgb)
+            && self.coarse_rho.iter().all(grey_rgb)
+            && self.parts.iter().all(|p| {
+                grey_sparse(&p.f)
+                    && grey_sparse(&p.g)
+                    && grey_sparse(&p.f_coarse)
+                    && grey_sparse(&p.g_coarse)
+            })
+    }
+
+    /// Bytes the operator holds: its sparse matrices (4-byte offsets and columns, 12-byte
+    /// values), the per-row reflectance and emission, and the mesh (about 160 bytes per
+    /// row with its element hierarchy).
+    pub fn bytes(&self) -> u64 {
+        let sparse = |s: &super::sparse::Sparse| {
+            (4 * s.offsets.len() + 4 * s.cols.len() + 12 * s.vals.len()) as u64
+        };
+        let matrices: u64 = self
+            .parts
+            .iter()
+            .map(|p| sparse(&p.f) + sparse(&p.g) + sparse(&p.f_coarse) + sparse(&p.g_coarse))
+            .sum();
+        matrices + (self.rows() as u64) * (2 * 24 + 160) + self.mesh.coarse_rows as u64 * 32
+    }
+
+    /// Channels the adjoint responses keep: 1 for a grey operator, else 3.
+    fn adjoint_channels(&self) -> usize {
+        if self.is_grey() {
+            1
+        } else {
+            3
+        }
+    }
+
     /// Bytes of adjoint responses per sensor (all parts and both levels).
     pub fn adjoint_bytes_per_sensor(&self) -> u64 {
-        self.parts.len() as u64 * (self.rows() + self.mesh.coarse_rows) as u64 * 3 * 4
+        self.parts.len() as u64
+            * (self.rows() + self.mesh.coarse_rows) as u64
+            * self.adjoint_channels() as u64
+            * 4
     }
 
     /// Sensors per [`AdjointBlock`] so that one block's responses take at most `max_bytes`
@@ -70,17 +117,19 @@ impl Transport {
         let tol = self.params.tolerance;
         let max = self.params.max_sweeps;
         let k = self.parts.first().map_or(0, |p| p.g.rows());
+        let channels = self.adjoint_channels();
         let solved: Vec<(Vec<f32>, u32)> = jobs
             .par_iter()
             .map(|&(p, l, b)| {
                 let (f, g, rho) = self.level(p, l);
-                adjoint_block(f, g, rho, b..(b + BLOCK).min(k), tol, max)
+                adjoint_block(f, g, rho, b..(b + BLOCK).min(k), tol, max, channels)
             })
             .collect();
         let sweeps = solved.iter().map(|s| s.1 as u64).sum();
         AdjointBlock {
             sensors,
             parts,
+            channels,
             x: jobs
                 .into_iter()
                 .zip(solved)
@@ -98,36 +147,104 @@ impl AdjointBlock {
     /// `parts` rows of per-sensor fine indirect illuminance, then one row of the coarse
     /// level's mean over parts, each as wide as the block; lux per W/m².
     pub fn apply(&self, op: &Transport, weights: &[(u32, Rgb)]) -> Vec<f32> {
-        let (fine, coarse) = op.terms(weights);
+        let terms = [op.direction_terms(weights)];
+        self.apply_many(op, &terms).pop().unwrap_or_default()
+    }
+
+    /// [`Self::apply`] for many directions at once (each its [`DirectionTerms`]), one
+    /// result per direction, bit-identical to applying them one by one.
+    ///
+    /// Why: one direction's coefficients read the block's responses at every row it
+    /// lights, hundreds of megabytes on a large grid, for a few multiply-adds per value
+    /// read; memory bandwidth was the cold year's largest cost. Here each row's responses
+    /// are read once for all the directions lighting it (the terms regrouped by row), so
+    /// the responses stream once per batch. Per value, the sums run in the same order as
+    /// one by one (parts and levels, then rows ascending, then channels).
+    pub fn apply_many(&self, op: &Transport, terms: &[DirectionTerms]) -> Vec<Vec<f32>> {
         let n = self.sensors.len();
         let k0 = self.sensors.start;
-        let mut out = vec![0f32; (self.parts + 1) * n];
-        let inv_parts = 1.0 / self.parts.max(1) as f32;
+        let nd = terms.len();
+        let parts = self.parts;
+        let stride = (parts + 1) * n;
+        let inv_parts = 1.0 / parts.max(1) as f32;
         let k = op.parts.first().map_or(0, |p| p.g.rows());
-        for (p, l, b, x) in &self.x {
-            let w = (b + BLOCK).min(k) - b;
-            // The overlap of this sub-block with the block's sensors.
-            let lo = (*b).max(k0);
-            let hi = (b + w).min(self.sensors.end);
-            if lo >= hi {
-                continue;
+        let ch = self.channels;
+        // Per level, each row's (direction, weights), directions ascending.
+        let by_row = |level: usize, rows: usize| {
+            let mut offsets = vec![0u32; rows + 1];
+            for t in terms {
+                for &(r, _) in if level == 0 { &t.0 .0 } else { &t.0 .1 } {
+                    offsets[r as usize + 1] += 1;
+                }
             }
-            let (src, row, scale) = if *l == 0 {
-                (&fine, *p, 1.0)
-            } else {
-                (&coarse, self.parts, inv_parts)
-            };
-            let o = &mut out[row * n + (lo - k0)..row * n + (hi - k0)];
-            for &(r, v) in src.iter() {
-                for (c, &vc) in v.iter().enumerate() {
-                    if vc == 0.0 {
-                        continue;
+            for r in 0..rows {
+                offsets[r + 1] += offsets[r];
+            }
+            let mut fill = offsets.clone();
+            let mut entries = vec![(0u32, [0f32; 3]); offsets[rows] as usize];
+            for (d, t) in terms.iter().enumerate() {
+                for &(r, v) in if level == 0 { &t.0 .0 } else { &t.0 .1 } {
+                    let at = &mut fill[r as usize];
+                    entries[*at as usize] = (d as u32, v);
+                    *at += 1;
+                }
+            }
+            (offsets, entries)
+        };
+        let levels = [by_row(0, op.rows()), by_row(1, op.mesh.coarse_rows)];
+        // Sub-blocks of sensors in parallel (disjoint columns); within one, parts and
+        // levels in their order, as one by one.
+        let mut subs: Vec<usize> = self.x.iter().map(|e| e.2).collect();
+        subs.sort_unstable();
+        subs.dedup();
+        let done: Vec<(usize, usize, Vec<f32>)> = subs
+            .par_iter()
+            .filter_map(|&b| {
+                let w = (b + BLOCK).min(k) - b;
+                // The overlap of this sub-block with the block's sensors.
+                let lo = b.max(k0);
+                let hi = (b + w).min(self.sensors.end);
+                if lo >= hi {
+                    return None;
+                }
+                let wb = hi - lo;
+                let mut local = vec![0f32; nd * (parts + 1) * wb];
+                for (p, l, _, x) in self.x.iter().filter(|e| e.2 == b) {
+                    let (row, scale) = if *l == 0 {
+                        (*p, 1.0)
+                    } else {
+                        (parts, inv_parts)
+                    };
+                    let (offsets, entries) = &levels[*l];
+                    for r in 0..offsets.len() - 1 {
+                        let (e0, e1) = (offsets[r] as usize, offsets[r + 1] as usize);
+                        for &(d, v) in &entries[e0..e1] {
+                            let o = &mut local[(d as usize * (parts + 1) + row) * wb..][..wb];
+                            // Grey: one X for the three channels, so their weights add.
+                            let grey = [v[0] + v[1] + v[2]];
+                            let v: &[f32] = if ch == 1 { &grey } else { &v };
+                            for (c, &vc) in v.iter().enumerate() {
+                                if vc == 0.0 {
+                                    continue;
+                                }
+                                let vc = vc * scale;
+                                let xs = &x[(r * ch + c) * w + (lo - b)..][..wb];
+                                for (o, xv) in o.iter_mut().zip(xs) {
+                                    *o += vc * *xv;
+                                }
+                            }
+                        }
                     }
-                    let vc = vc * scale;
-                    let xs = &x[(r as usize * 3 + c) * w + (lo - b)..][..hi - lo];
-                    for (o, xv) in o.iter_mut().zip(xs) {
-                        *o += vc * *xv;
-                    }
+                }
+                Some((lo - k0, wb, local))
+            })
+            .collect();
+        let mut out = vec![vec![0f32; stride]; nd];
+        for (at, wb, local) in done {
+            for (d, o) in out.iter_mut().enumerate() {
+                for row in 0..=parts {
+                    o[row * n + at..][..wb]
+                        .copy_from_slice(&local[(d * (parts + 1) + row) * wb..][..wb]);
                 }
             }
         }
@@ -135,7 +252,18 @@ impl AdjointBlock {
     }
 }
 
+/// One direction's source terms ([`Transport::direction_terms`]), ready for
+/// [`AdjointBlock::apply_many`].
+#[derive(Clone, Debug, Default)]
+pub struct DirectionTerms(Terms);
+
 impl Transport {
+    /// The source terms of one direction whose mesh irradiance per unit normal irradiance
+    /// is `weights` ((row, RGB W/m² per W/m²), rows ascending).
+    pub fn direction_terms(&self, weights: &[(u32, Rgb)]) -> DirectionTerms {
+        DirectionTerms(self.terms(weights))
+    }
+
     /// Source terms of one direction (see [`Terms`]); the coarse level reads the area
     /// average of the fine source over each coarse row, as [`Transport::solve`] does.
     fn terms(&self, w: &[(u32, Rgb)]) -> Terms {

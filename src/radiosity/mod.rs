@@ -21,7 +21,7 @@ mod sparse; // sparse RGB rows
 mod strata; // equal-area direction strata of the bundles
 pub mod transport; // the Transport type, its parameters and build
 
-pub use coefficients::AdjointBlock;
+pub use coefficients::{AdjointBlock, DirectionTerms};
 pub use gather::TransportSensor;
 pub use mesh::Mesh;
 pub use response::{DirectionResponse, SensorResponse};

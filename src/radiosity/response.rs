@@ -69,7 +69,7 @@ impl Transport {
                 let (f, g, rho) = self.level(p, l);
                 let s0 = b * BLOCK;
                 let s1 = (s0 + BLOCK).min(k);
-                adjoint_block(f, g, rho, s0..s1, tol, max)
+                adjoint_block(f, g, rho, s0..s1, tol, max, 3)
             })
             .collect();
         let mut x: Vec<Vec<f32>> = Vec::new();
@@ -246,8 +246,10 @@ impl Transport {
     }
 }
 
-/// Gauss–Seidel on the adjoint for sensors `range`: returns X as rows × 3 × |range| and
-/// the sweeps done.
+/// Gauss–Seidel on the adjoint for sensors `range`: returns X as rows × `channels` ×
+/// |range| and the sweeps done. `channels` is 3, or 1 when ρ, F and G are grey
+/// ([`Transport::is_grey`]): the three systems are then one, solved once with channel 0's
+/// values (the same arithmetic as each of the three).
 pub(super) fn adjoint_block(
     f: &Sparse,
     g: &Sparse,
@@ -255,19 +257,21 @@ pub(super) fn adjoint_block(
     range: std::ops::Range<usize>,
     tol: f64,
     max_sweeps: u32,
+    channels: usize,
 ) -> (Vec<f32>, u32) {
     let n = f.rows();
     let w = range.len();
+    let ch = channels;
     if w == 0 || n == 0 {
-        return (vec![0.0; n * 3 * w], 0);
+        return (vec![0.0; n * ch * w], 0);
     }
     // Gᵀ for the block: x starts at it.
-    let mut gt = vec![0f32; n * 3 * w];
+    let mut gt = vec![0f32; n * ch * w];
     for (j, s) in range.clone().enumerate() {
         for e in g.offsets[s] as usize..g.offsets[s + 1] as usize {
             let r = g.cols[e] as usize;
-            for c in 0..3 {
-                gt[(r * 3 + c) * w + j] += g.vals[e][c];
+            for c in 0..ch {
+                gt[(r * ch + c) * w + j] += g.vals[e][c];
             }
         }
     }
@@ -302,17 +306,17 @@ pub(super) fn adjoint_block(
         return (x, 0);
     }
     let floor = 1e-6 * g_max;
-    let mut new = vec![0f32; 3 * w];
+    let mut new = vec![0f32; ch * w];
     let mut prev_change = f64::INFINITY;
     let rho_max = rho.iter().map(|r| r.max_element()).fold(0.5, f64::max);
     for sweep in 1..=max_sweeps {
         let mut change = 0f64;
         for i in 0..n {
-            new.copy_from_slice(&gt[i * 3 * w..(i + 1) * 3 * w]);
+            new.copy_from_slice(&gt[i * ch * w..(i + 1) * ch * w]);
             for e in count[i] as usize..count[i + 1] as usize {
-                let src = cols[e] as usize * 3 * w;
+                let src = cols[e] as usize * ch * w;
                 let v = vals[e];
-                for c in 0..3 {
+                for c in 0..ch {
                     let coef = v[c];
                     if coef == 0.0 {
                         continue;
@@ -323,7 +327,7 @@ pub(super) fn adjoint_block(
                     }
                 }
             }
-            let old = &mut x[i * 3 * w..(i + 1) * 3 * w];
+            let old = &mut x[i * ch * w..(i + 1) * ch * w];
             let (mut d, mut m) = (0f32, 0f32);
             for (o, nv) in old.iter().zip(&new) {
                 d = d.max((nv - o).abs());

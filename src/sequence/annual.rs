@@ -41,11 +41,6 @@ use std::time::Instant;
 /// Days computed in parallel between checkpoints.
 const DAYS_PER_BATCH: usize = 8;
 
-/// Default memory for the adjoint sensor responses held at once while daylight
-/// coefficients are computed ([`AnnualOptions::response_max_bytes`]): sensors are solved in
-/// blocks that fit it.
-pub const RESPONSE_MAX_BYTES: u64 = 512 << 20;
-
 /// What an annual run is asked to do besides the defaults.
 #[derive(Clone, Debug)]
 pub struct AnnualOptions {
@@ -63,9 +58,10 @@ pub struct AnnualOptions {
     /// is computed once and cached, and a step is a sum over its sources. False makes
     /// every step a warm-started forward solve (what `--surfaces` needs).
     pub daylight_coefficients: bool,
-    /// Memory for the adjoint responses held at once while coefficients are computed,
-    /// bytes ([`RESPONSE_MAX_BYTES`]).
-    pub response_max_bytes: u64,
+    /// Resident memory the run may use (`None`: no cap; `--max-memory`): the daylight
+    /// coefficients' adjoint blocks are sized to it
+    /// ([`super::coefficients::adjoint_budget`]). Results do not depend on it.
+    pub max_memory: Option<crate::memory::MemoryCap>,
     /// Also write `surfaces.csv` (per group: incident irradiance, transmitted solar power).
     pub surfaces: bool,
     /// LEED v4.1 Daylight Option 1 with operable blinds: `leed.json`, `leed_blinds.csv`,
@@ -86,7 +82,7 @@ impl Default for AnnualOptions {
             metrics: MetricParams::default(),
             ill: false,
             daylight_coefficients: true,
-            response_max_bytes: RESPONSE_MAX_BYTES,
+            max_memory: None,
             surfaces: false,
             leed: false,
             en17037: false,
@@ -155,6 +151,8 @@ pub struct AnnualReport {
     pub compliance: Option<super::compliance::ComplianceReport>,
     /// Whether the run was stopped before its end (Ctrl-C); rerun to continue.
     pub interrupted: bool,
+    /// The memory cap, the peak resident memory and each stage's peak.
+    pub memory: super::report::MemoryReport,
 }
 
 /// One planned timestep.
@@ -255,7 +253,7 @@ pub fn run_annual(
         store,
         &EngineOptions {
             surfaces: opts.surfaces,
-            response_max_bytes: opts.response_max_bytes,
+            max_memory_bytes: opts.max_memory.as_ref().map_or(0, |c| c.bytes),
             defer_operator: opts.daylight_coefficients,
             mesh_solution: false,
             values_only: opts.series_only,
@@ -270,7 +268,7 @@ pub fn run_annual(
             .filter(|s| matches!(classify(scene, s), Kind::Day { .. }))
             .map(|s| (step_time(scene, s), perez(s.record)))
             .collect();
-        engine.prepare(&lit);
+        engine.prepare(&lit)?;
     }
     report.coefficients = engine.coefficient_stats();
     report.operator_from_cache = engine.operator_from_cache();
@@ -359,8 +357,9 @@ pub fn run_annual(
             report.interrupted = true;
             break;
         }
-        let results: Vec<Result<Vec<StepOut>>> =
-            batch.par_iter().map(|day| ctx.run_day(day)).collect();
+        let results: Vec<Result<Vec<StepOut>>> = engine.peaks().measure("steps", || {
+            batch.par_iter().map(|day| ctx.run_day(day)).collect()
+        });
         for (day, res) in batch.iter().zip(results) {
             let outs = res?;
             for (s, o) in day.iter().zip(&outs) {
@@ -502,6 +501,11 @@ pub fn run_annual(
         }
     }
     report.total_seconds = t0.elapsed().as_secs_f64();
+    report.memory = super::report::MemoryReport::of(
+        opts.max_memory.as_ref().map_or(0, |c| c.bytes),
+        opts.max_memory.as_ref().map_or("none", |c| &c.from),
+        Some(engine.peaks()),
+    );
     let json = serde_json::to_string_pretty(&report)
         .map_err(|e| Error::Internal(format!("report serialisation: {e}")))?;
     crate::files::write_atomic(&out.join("report.json"), json.as_bytes())?;

@@ -34,8 +34,9 @@ use super::estimate::SensorValue;
 use super::sky::{build_sky, sources_for};
 use super::step::StepTime;
 use crate::cache::{self, RecordKey, SceneHash, Section, FIRST_USER_TAG};
+use crate::error::{Error, Result};
 use crate::photometry::{from_lux, lux, Rgb};
-use crate::radiosity::{Transport, TransportParams, TransportSensor};
+use crate::radiosity::{DirectionTerms, Transport, TransportParams, TransportSensor};
 use crate::scene::Scene;
 use crate::sensors::SensorDirect;
 use crate::site::solar_position::solar_position;
@@ -55,11 +56,60 @@ const TAG_VALUES: u32 = FIRST_USER_TAG;
 /// (a large scene's projection leaves are megabytes each).
 const TAG_DIRECT: u32 = FIRST_USER_TAG + 1;
 /// Version of what a coefficient record holds, hashed into its key.
-const COEFFICIENTS_VERSION: u32 = 2;
+const COEFFICIENTS_VERSION: u32 = 3;
 /// Direct rows per node: 4 child responses, their sum, 4 uncertainties.
 const DIRECT_ROWS: usize = 9;
-/// Directions whose mesh weights are held at once while coefficients are computed.
-const BATCH: usize = 512;
+/// Adjoint responses held at once without a memory cap, bytes: beyond it, larger blocks
+/// save little time (each block reads every direction once more).
+pub const RESPONSE_MAX_BYTES: u64 = 512 << 20;
+/// Directions whose source terms are held at once while coefficients are computed, and
+/// applied together ([`crate::radiosity::AdjointBlock::apply_many`]): a few megabytes of
+/// terms each on the generated building, and the block's responses read once per batch.
+const BATCH: usize = 64;
+
+/// Bytes one direction in flight takes while its coefficients are computed, at LDI
+/// resolution `resolution` (an estimate: the LDI's pixel offsets and fragments, 16 bytes
+/// per pixel of its longer side squared, and its record and mesh weights, smaller). On
+/// the generated building, the coefficients' stage peaks about 130 MB above the steps
+/// with two threads at 2048 pixels: this allows 128 MB.
+fn direction_bytes(resolution: u32) -> u64 {
+    resolution as u64 * resolution as u64 * 16
+}
+
+/// Bytes the scene, its ray tracer (BVH) and its projection copy take, estimated per
+/// triangle.
+fn scene_bytes(scene: &Scene) -> u64 {
+    scene.triangles.len() as u64 * 600 + scene.sensors.len() as u64 * 64
+}
+
+/// Bytes of adjoint responses held at once: [`RESPONSE_MAX_BYTES`], or less when the cap
+/// `max_memory` (0: none) minus `held` (what the process holds, the coefficients and the
+/// directions in flight) is smaller; at least `one_block` (the smallest adjoint block).
+///
+/// # Errors
+/// `held + one_block` is above the cap: an input error naming `--max-memory` and the
+/// smallest cap that fits.
+pub fn adjoint_budget(max_memory: u64, held: u64, one_block: u64) -> Result<u64> {
+    if max_memory == 0 {
+        return Ok(RESPONSE_MAX_BYTES);
+    }
+    let needed = held + one_block;
+    if needed > max_memory {
+        return Err(Error::arg(
+            "--max-memory",
+            crate::memory::format_size(max_memory),
+            format!(
+                "the daylight coefficients need at least {} (held {}, one block of adjoint \
+                 responses {}); give --max-memory {} or more",
+                crate::memory::format_size(needed),
+                crate::memory::format_size(held),
+                crate::memory::format_size(one_block),
+                crate::memory::format_size(needed),
+            ),
+        ));
+    }
+    Ok((max_memory - held).min(RESPONSE_MAX_BYTES))
+}
 
 /// One node's per-sensor data, rows of `sensors` f32 each.
 #[derive(Clone, Debug, Default)]
@@ -152,17 +202,21 @@ impl Coefficients {
     /// Prepares the coefficients every step of `steps` needs: the nodes of each step's
     /// cut (read from the cache or computed, through `dirs` for the projections and
     /// direct responses and `op` for the interreflection) and the sun-grid vertices
-    /// around each step's sun, with at most `max_bytes` of adjoint responses at once.
-    /// Also returns each step's sky (`None` where it cannot be built), so the steps need
-    /// not build them again.
+    /// around each step's sun, with the adjoint responses sized to what `max_memory`
+    /// leaves ([`adjoint_budget`]; 0: no cap). Also returns each step's sky (`None`
+    /// where it cannot be built), so the steps need not build them again.
+    ///
+    /// # Errors
+    /// The coefficients, one adjoint block and the directions in flight cannot fit
+    /// `max_memory` beside what the process already holds ([`crate::Error::Input`]).
     pub(super) fn prepare(
         scene: &Scene,
         dirs: &Directions,
         op: &mut Option<Transport>,
         load_operator: impl FnOnce() -> Transport,
         steps: &[(StepTime, SkySpec)],
-        max_bytes: u64,
-    ) -> (Coefficients, Vec<Option<Sky>>) {
+        max_memory: u64,
+    ) -> Result<(Coefficients, Vec<Option<Sky>>)> {
         let t0 = Instant::now();
         let quality = dirs.quality();
         let grid = SunGrid {
@@ -261,7 +315,30 @@ impl Coefficients {
             // every missing direction's mesh irradiance into its coefficients.
             // The operator only now: a run whose coefficients are all cached never reads it.
             let op: &Transport = op.get_or_insert_with(load_operator);
-            let block = op.adjoint_block_size(max_bytes);
+            let coefficient_bytes = (list.len() * k * (DIRECT_ROWS + parts + 1) * 4) as u64;
+            let in_flight = rayon::current_num_threads() as u64
+                * direction_bytes(quality.projection.resolution_for(true));
+            // What is held beside the adjoint blocks, from sizes (not from the resident
+            // memory, which other work in the process would make a moving target): the
+            // same inputs always get the same blocks and the same smallest cap.
+            let held = op.bytes() + scene_bytes(scene) + coefficient_bytes + in_flight;
+            // The process may hold more than the sizes say (the allocator keeps what the
+            // operator's build freed): the blocks shrink to that too, never below one.
+            let resident =
+                crate::memory::resident_bytes().map_or(0, |r| r + coefficient_bytes + in_flight);
+            let budget = adjoint_budget(
+                max_memory,
+                held,
+                op.adjoint_bytes_per_sensor() * op.adjoint_block_size(0) as u64,
+            )?;
+            let budget = if max_memory == 0 {
+                budget
+            } else {
+                budget
+                    .min(max_memory.saturating_sub(resident))
+                    .max(op.adjoint_bytes_per_sensor() * op.adjoint_block_size(0) as u64)
+            };
+            let block = op.adjoint_block_size(budget);
             stats.block_sensors = block.min(k);
             let mut fresh: Vec<NodeData> = todo
                 .iter()
@@ -275,18 +352,27 @@ impl Coefficients {
                 stats.sweeps += xb.sweeps;
                 let w = xb.sensors.len();
                 for (ids, outs) in todo.chunks(BATCH).zip(fresh.chunks_mut(BATCH)) {
-                    ids.par_iter().zip(outs).for_each(|(&i, nd)| {
-                        let src = &list[i];
-                        let d = dirs.fetch(src, res_of(src));
-                        if s0 == 0 && !src.is_sun() {
-                            nd.direct = direct_rows(&d.sensors, k);
-                        }
-                        let v = xb.apply(op, &mesh_weights(scene, op, src, &d.record));
+                    // The batch's projections and mesh weights in parallel, then the
+                    // block's responses applied to all of them in one pass.
+                    let terms: Vec<DirectionTerms> = ids
+                        .par_iter()
+                        .zip(outs.par_iter_mut())
+                        .map(|(&i, nd)| {
+                            let src = &list[i];
+                            let d = dirs.fetch(src, res_of(src));
+                            if s0 == 0 && !src.is_sun() {
+                                nd.direct = direct_rows(&d.sensors, k);
+                            }
+                            op.direction_terms(&mesh_weights(scene, op, src, &d.record))
+                        })
+                        .collect();
+                    let vs = xb.apply_many(op, &terms);
+                    for (nd, v) in outs.iter_mut().zip(vs) {
                         for row in 0..=parts {
                             nd.indirect[row * k + s0..row * k + s0 + w]
                                 .copy_from_slice(&v[row * w..(row + 1) * w]);
                         }
-                    });
+                    }
                 }
             }
             for (&i, nd) in todo.iter().zip(fresh) {
@@ -321,7 +407,7 @@ impl Coefficients {
             coarse: Mutex::new(HashMap::new()),
             stats,
         };
-        (c, skies)
+        Ok((c, skies))
     }
 
     /// One step's sensor values from the coefficients: `fine` and `coarse` the step's

@@ -31,30 +31,48 @@ pub fn write_metrics(
     params: &MetricParams,
 ) -> Result<Vec<metrics::SensorMetrics>> {
     params.validate()?;
-    let (times, total) = export::read_illuminance_csv(&out.join("illuminance.csv"))?;
-    let (_, sun) = export::read_illuminance_csv(&out.join("direct_sun.csv"))?;
-    let times = parse_times(&times)?;
-    let occupied: Vec<bool> = times
-        .iter()
-        .map(|t| metrics::is_occupied(*t, step_minutes, params))
-        .collect();
-    let sensors = total.first().map_or(0, |r| r.len());
-    // Night steps are written as 0 lx: counted dark whether flagged or not.
-    let sun_up = vec![true; times.len()];
-    let per: Vec<metrics::SensorMetrics> = (0..sensors)
-        .map(|k| {
-            let t: Vec<f64> = total.iter().map(|r| r[k]).collect();
-            let s: Vec<f64> = sun.iter().map(|r| r[k]).collect();
-            metrics::sensor_metrics(
-                &t,
-                &s,
-                &occupied,
-                &sun_up,
-                step_minutes as f64 / 60.0,
-                params,
-            )
-        })
-        .collect();
+    // Both tables row by row, in step: a year of a large grid is never held whole.
+    let (tp, sp) = (out.join("illuminance.csv"), out.join("direct_sun.csv"));
+    let mut total = export::IlluminanceRows::open(&tp)?;
+    let mut sun = export::IlluminanceRows::open(&sp)?;
+    let mut acc = vec![metrics::SensorAccumulator::default(); total.columns()];
+    let (mut tv, mut sv) = (Vec::new(), Vec::new());
+    let mut rows = 0usize;
+    loop {
+        let (t, s) = (total.next_row(&mut tv)?, sun.next_row(&mut sv)?);
+        let (Some(t), Some(s)) = (t, s) else {
+            if total.next_row(&mut tv)?.is_some() || sun.next_row(&mut sv)?.is_some() {
+                return Err(Error::input(
+                    &sp,
+                    Some(rows + 2),
+                    None,
+                    format!("has a different number of rows from {}", tp.display()),
+                ));
+            }
+            break;
+        };
+        rows += 1;
+        if t != s || tv.len() != sv.len() {
+            return Err(Error::input(
+                &sp,
+                Some(rows + 1),
+                Some(&s),
+                format!(
+                    "row {rows} differs in time or width from {}'s {t}",
+                    tp.display()
+                ),
+            ));
+        }
+        let time = parse_times(&[t])?[0];
+        let occupied = metrics::is_occupied(time, step_minutes, params);
+        // Night steps are written as 0 lx: counted dark whether flagged or not.
+        for (a, (&e, &es)) in acc.iter_mut().zip(tv.iter().zip(&sv)) {
+            a.add(e, es, occupied, true, params);
+        }
+    }
+    let sensors = if rows == 0 { 0 } else { acc.len() };
+    let hours = step_minutes as f64 / 60.0;
+    let per: Vec<metrics::SensorMetrics> = acc[..sensors].iter().map(|a| a.finish(hours)).collect();
     let grids = export::grids::read_grids_json(out, sensors)?;
     let column = grids
         .as_deref()

@@ -50,19 +50,27 @@ pub fn transport(
     }
     let t = Transport::build_with(scene, &scene.sensors, params, tracer);
     if store.is_enabled() {
-        store.put(&k, &encode(&k, &t));
+        let stats = stats_of(&t);
+        let parts = t.export();
+        store.put_sections(&k, &sections(&stats, &parts));
     }
     (t, false)
 }
 
-fn encode(k: &RecordKey, t: &Transport) -> Vec<u8> {
-    let stats = [
+fn stats_of(t: &Transport) -> [f64; 3] {
+    [
         t.stats.lines as f64,
         t.stats.links as f64,
         t.stats.sensor_rays as f64,
-    ];
-    let parts = t.export();
-    let mut sections = vec![Section::f64s(TAG_STATS, &stats)];
+    ]
+}
+
+/// The operator's record sections, borrowing its arrays (written as they lie).
+fn sections<'a>(
+    stats: &'a [f64; 3],
+    parts: &'a [[crate::radiosity::transport::SparseSlices<'a>; 4]],
+) -> Vec<Section<'a>> {
+    let mut sections = vec![Section::f64s(TAG_STATS, stats)];
     for (p, mats) in parts.iter().enumerate() {
         for (m, (o, c, v)) in mats.iter().enumerate() {
             let tag = TAG_PARTS + 16 * p as u32 + 4 * m as u32;
@@ -71,7 +79,7 @@ fn encode(k: &RecordKey, t: &Transport) -> Vec<u8> {
             sections.push(Section::of(tag + 2, v));
         }
     }
-    cache::encode(k, &sections)
+    sections
 }
 
 fn decode(scene: &Scene, params: &TransportParams, r: &cache::MappedRecord) -> Option<Transport> {

@@ -436,6 +436,8 @@ pub struct RenderOutputs {
     pub gltf: Option<std::path::PathBuf>,
     /// The command line, for the files' provenance.
     pub command: String,
+    /// The memory cap the run was given (reported; `None`: none).
+    pub max_memory: Option<crate::memory::MemoryCap>,
 }
 
 /// What a render run did.
@@ -489,6 +491,9 @@ pub struct RenderReport {
     pub warnings: Vec<String>,
     /// How each pixel's `err` is estimated.
     pub error_model: String,
+    /// The memory cap and the peak resident memory.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub memory: Option<super::report::MemoryReport>,
 }
 
 /// How a pixel's stated error is made (`report.json`).
@@ -700,6 +705,11 @@ pub fn run_render(
     report.median_step_seconds = median(step_s);
     report.median_gather_seconds = median(gather_s);
     report.total_seconds = t0.elapsed().as_secs_f64();
+    report.memory = Some(super::report::MemoryReport::of(
+        outputs.max_memory.as_ref().map_or(0, |c| c.bytes),
+        outputs.max_memory.as_ref().map_or("none", |c| &c.from),
+        None,
+    ));
     let json = serde_json::to_string_pretty(&report)
         .map_err(|e| Error::Internal(format!("report serialisation: {e}")))?;
     crate::files::write_atomic(&out.join("report.json"), json.as_bytes())?;

@@ -35,6 +35,35 @@ impl StageTimes {
     }
 }
 
+/// Memory of a run (`report.json` `memory`).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct MemoryReport {
+    /// The cap the run was given, bytes (0: none).
+    pub max_memory_bytes: u64,
+    /// Where the cap came from (`--max-memory 4G`, `80 % of MemAvailable`).
+    pub max_memory_from: String,
+    /// Peak resident memory of the process, bytes (Linux `VmHWM`; 0 where it cannot be
+    /// read).
+    pub peak_bytes: u64,
+    /// Peak resident memory per stage (set-up stages, then the caller's), bytes; a stage
+    /// includes the stages run inside it.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub stage_peak_bytes: Vec<(String, u64)>,
+}
+
+impl MemoryReport {
+    /// The report of a run capped at `cap` (bytes, 0: none; `from`: where the cap came
+    /// from), with the stages `peaks` measured.
+    pub fn of(cap: u64, from: &str, peaks: Option<&crate::memory::StagePeaks>) -> MemoryReport {
+        MemoryReport {
+            max_memory_bytes: cap,
+            max_memory_from: from.to_owned(),
+            peak_bytes: crate::memory::peak_resident_bytes().unwrap_or(0),
+            stage_peak_bytes: peaks.map(|p| p.stages()).unwrap_or_default(),
+        }
+    }
+}
+
 /// Sun details of an instant.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct SunReport {
@@ -236,4 +265,8 @@ pub struct Report {
     pub max_lux_err: f64,
     /// Largest `lux_err / lux` over sensors with lux > 1.
     pub max_relative_err: f64,
+    /// The memory cap and the peak resident memory (set by the caller that knows the
+    /// cap).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub memory: Option<MemoryReport>,
 }

@@ -27,6 +27,7 @@ use super::surfaces::SurfaceMap;
 use crate::cache::Store;
 use crate::error::Result;
 use crate::hierarchy::Hierarchy;
+use crate::memory::StagePeaks;
 use crate::photometry::Rgb;
 use crate::projection::DirectionRecord;
 use crate::radiosity::TransportState;
@@ -77,6 +78,8 @@ pub struct Engine<'a> {
     coefficients: Option<(Coefficients, Directions<'a>)>,
     /// Skies [`Engine::prepare`] built, each taken by its step.
     skies: Mutex<HashMap<SkyKey, Sky>>,
+    /// Peak resident memory of the set-up's stages (and of the caller's, [`Engine::peaks`]).
+    peaks: StagePeaks,
 }
 
 /// A step's time and sky parameters, exactly.
@@ -117,16 +120,20 @@ impl<'a> Engine<'a> {
         opts: &EngineOptions,
     ) -> Engine<'a> {
         let mut setup = StageTimes::default();
+        let peaks = StagePeaks::default();
         // One BVH per run, shared by the sensor responses and the operator's lines.
-        let tracer = Arc::new(setup.time("tracer", || Tracer::new(scene)));
+        let tracer =
+            Arc::new(peaks.measure("tracer", || setup.time("tracer", || Tracer::new(scene))));
         // The surface output needs the operator's mesh (its columns) even in a black scene.
         let wanted = (needs_interreflection(scene)
             && (!scene.sensors.is_empty() || opts.mesh_solution))
             || opts.surfaces;
         let defer = wanted && opts.defer_operator && !opts.surfaces && !opts.mesh_solution;
         let (operator, operator_from_cache) = if wanted && !defer {
-            let (t, cached) = setup.time("operator", || {
-                super::operator::transport(scene, &quality.transport, store, &tracer)
+            let (t, cached) = peaks.measure("operator", || {
+                setup.time("operator", || {
+                    super::operator::transport(scene, &quality.transport, store, &tracer)
+                })
             });
             (Some(t), cached)
         } else {
@@ -151,6 +158,7 @@ impl<'a> Engine<'a> {
             opts: *opts,
             coefficients: None,
             skies: Mutex::new(HashMap::new()),
+            peaks,
         }
     }
 
@@ -159,9 +167,13 @@ impl<'a> Engine<'a> {
     /// direction none of these had panics). Declined (returns false, steps keep the
     /// forward solve) when the scene has no interreflection, when surface output needs
     /// each step's mesh solution, or when something emits.
-    pub fn prepare(&mut self, steps: &[(StepTime, SkySpec)]) -> bool {
+    ///
+    /// # Errors
+    /// The coefficients cannot fit [`EngineOptions::max_memory_bytes`] ([`crate::Error::Input`]
+    /// naming `--max-memory` and the smallest cap that fits), found before they are computed.
+    pub fn prepare(&mut self, steps: &[(StepTime, SkySpec)]) -> Result<bool> {
         if self.operator.is_none() && !self.operator_deferred {
-            return false;
+            return Ok(false);
         }
         let emits = self.scene.materials.iter().any(|m| m.is_emitter());
         if self.surfaces.is_some()
@@ -170,27 +182,35 @@ impl<'a> Engine<'a> {
             || self.opts.mesh_solution
         {
             self.load_operator();
-            return false;
+            return Ok(false);
         }
         let (scene, store, tracer) = (self.scene, self.store, &self.tracer);
         let params = self.dirs.quality().transport;
         let (setup, from_cache) = (&mut self.setup, &mut self.operator_from_cache);
+        let peaks = &self.peaks;
         let load = || {
-            let (t, cached) = setup.time("operator", || {
-                super::operator::transport(scene, &params, store, tracer)
+            let (t, cached) = peaks.measure("operator", || {
+                setup.time("operator", || {
+                    super::operator::transport(scene, &params, store, tracer)
+                })
             });
             *from_cache = cached;
             t
         };
-        let (c, skies) = Coefficients::prepare(
-            self.scene,
-            &self.dirs,
-            &mut self.operator,
-            load,
-            steps,
-            self.opts.response_max_bytes,
-        );
-        self.operator_deferred = self.operator.is_none();
+        let (c, skies) = peaks.measure("daylight_coefficients", || {
+            Coefficients::prepare(
+                scene,
+                &self.dirs,
+                &mut self.operator,
+                load,
+                steps,
+                self.opts.max_memory_bytes,
+            )
+        })?;
+        // The steps sum coefficients and never read the operator again: it is the run's
+        // largest holding (about half a gigabyte on the generated building), so it goes.
+        self.operator = None;
+        self.operator_deferred = true;
         self.setup.add("daylight_coefficients", c.stats.seconds);
         let mut memo = self.skies.lock().expect("sky memo");
         for ((at, spec), sky) in steps.iter().zip(skies) {
@@ -206,7 +226,7 @@ impl<'a> Engine<'a> {
             self.tracer.clone(),
         );
         self.coefficients = Some((c, sun));
-        true
+        Ok(true)
     }
 
     /// Reads (or builds) a deferred operator: what forward steps need.
@@ -214,8 +234,11 @@ impl<'a> Engine<'a> {
         if self.operator_deferred && self.operator.is_none() {
             let (scene, store, tracer) = (self.scene, self.store, &self.tracer);
             let params = self.dirs.quality().transport;
-            let (t, cached) = self.setup.time("operator", || {
-                super::operator::transport(scene, &params, store, tracer)
+            let setup = &mut self.setup;
+            let (t, cached) = self.peaks.measure("operator", || {
+                setup.time("operator", || {
+                    super::operator::transport(scene, &params, store, tracer)
+                })
             });
             self.operator = Some(t);
             self.operator_from_cache = cached;
@@ -251,6 +274,12 @@ impl<'a> Engine<'a> {
     /// Whether the operator was read from the cache.
     pub fn operator_from_cache(&self) -> bool {
         self.operator_from_cache
+    }
+
+    /// Peak resident memory per stage: the set-up's (tracer, operator, daylight
+    /// coefficients), and any the caller measures through it.
+    pub fn peaks(&self) -> &StagePeaks {
+        &self.peaks
     }
 
     /// Wall time of the run's set-up (the operator; adjoint responses), seconds.

@@ -17,9 +17,10 @@ pub struct EngineOptions {
     /// Per-group surface irradiance and transmitted power (`surfaces.csv`): needs the mesh
     /// solution, so every step solves forward.
     pub surfaces: bool,
-    /// Memory allowed for adjoint sensor responses while daylight coefficients are
-    /// computed ([`super::step::Engine::prepare`]), bytes.
-    pub response_max_bytes: u64,
+    /// Resident memory the run may use, bytes (0: no cap; `--max-memory`). The daylight
+    /// coefficients' adjoint blocks are sized to what is left of it
+    /// ([`super::step::Engine::prepare`]); results do not depend on it.
+    pub max_memory_bytes: u64,
     /// Do not read or build the interreflection operator in [`super::step::Engine::new`]:
     /// [`super::step::Engine::prepare`] reads it only when some daylight coefficients are missing (a
     /// warm annual run never needs it), or when the steps will solve forward after all.
