@@ -119,6 +119,23 @@ fn probe(dir: &Path) -> std::io::Result<()> {
     std::fs::remove_file(&p)
 }
 
+/// `text` with `&`, `<`, `>`, `"` and `'` escaped for HTML text and attributes (the report
+/// page, its maps and the render preview).
+pub fn html_escape(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&#39;"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -437,18 +437,4 @@ fn trim(v: f64) -> String {
     }
 }
 
-/// `text` with `&`, `<`, `>`, `"` and `'` escaped for HTML text and attributes.
-pub fn esc(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&#39;"),
-            c => out.push(c),
-        }
-    }
-    out
-}
+pub use crate::files::html_escape as esc;

@@ -89,20 +89,7 @@ pub fn write_apng(
     files::write_atomic(path, &encode_apng(width, height, frames, delay)?)
 }
 
-fn escape(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for c in s.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&#39;"),
-            c => out.push(c),
-        }
-    }
-    out
-}
+use crate::files::html_escape as escape;
 
 // The page's behaviour; it names no resource, so the page needs nothing but itself.
 const SCRIPT: &str = r#"

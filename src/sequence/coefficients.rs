@@ -83,13 +83,15 @@ fn scene_bytes(scene: &Scene) -> u64 {
 }
 
 /// Bytes of adjoint responses held at once: [`RESPONSE_MAX_BYTES`], or less when the cap
-/// `max_memory` (0: none) minus `held` (what the process holds, the coefficients and the
-/// directions in flight) is smaller; at least `one_block` (the smallest adjoint block).
+/// `max_memory` (0: none) minus what is held is smaller; at least `one_block` (the
+/// smallest adjoint block). What is held is `held` (from sizes: the operator, the scene,
+/// the coefficients and the directions in flight), or `resident` (the same with the
+/// process's resident memory for the first two) when that is larger.
 ///
 /// # Errors
 /// `held + one_block` is above the cap: an input error naming `--max-memory` and the
-/// smallest cap that fits.
-pub fn adjoint_budget(max_memory: u64, held: u64, one_block: u64) -> Result<u64> {
+/// smallest cap that fits (from sizes alone, so the same inputs name the same cap).
+pub fn adjoint_budget(max_memory: u64, held: u64, resident: u64, one_block: u64) -> Result<u64> {
     if max_memory == 0 {
         return Ok(RESPONSE_MAX_BYTES);
     }
@@ -108,7 +110,8 @@ pub fn adjoint_budget(max_memory: u64, held: u64, one_block: u64) -> Result<u64>
             ),
         ));
     }
-    Ok((max_memory - held).min(RESPONSE_MAX_BYTES))
+    let free = max_memory - held.max(resident.min(max_memory));
+    Ok(free.min(RESPONSE_MAX_BYTES).max(one_block))
 }
 
 /// One node's per-sensor data, rows of `sensors` f32 each.
@@ -329,15 +332,9 @@ impl Coefficients {
             let budget = adjoint_budget(
                 max_memory,
                 held,
+                resident,
                 op.adjoint_bytes_per_sensor() * op.adjoint_block_size(0) as u64,
             )?;
-            let budget = if max_memory == 0 {
-                budget
-            } else {
-                budget
-                    .min(max_memory.saturating_sub(resident))
-                    .max(op.adjoint_bytes_per_sensor() * op.adjoint_block_size(0) as u64)
-            };
             let block = op.adjoint_block_size(budget);
             stats.block_sensors = block.min(k);
             let mut fresh: Vec<NodeData> = todo

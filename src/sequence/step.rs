@@ -21,7 +21,7 @@ use super::config::{Quality, SkySpec};
 use super::direct::{mesh_irradiance, sensors_from_responses, MeshMemo, MeshWeights};
 use super::directions::{DirectionData, Directions};
 use super::estimate::{SensorValue, ERROR_MODEL};
-use super::report::{Counts, Report, StageTimes, SunReport};
+use super::report::{Report, StageTimes, SunReport};
 use super::sky::{build_sky, sources_for};
 use super::surfaces::SurfaceMap;
 use crate::cache::Store;
@@ -39,9 +39,12 @@ use crate::sources::{Source, SourceKey};
 use crate::trace::Tracer;
 use crate::transfer;
 use chrono::Datelike;
+use notes::{count_sources, note_errors};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
+
+mod notes; // what a step's report says: counts, skipped work, the largest errors
 
 pub use super::step_types::{EngineOptions, Step, StepTime};
 
@@ -545,51 +548,6 @@ impl<'a> Engine<'a> {
         values
     }
 
-    /// The report's source counts, sun snapping and what the scene lets the step skip.
-    fn note_sources(&self, s: &super::sky::SkySources, report: &mut Report) {
-        let scene = self.scene;
-        report.counts = Counts {
-            negligible_sources: s.negligible,
-            elements_before: scene.triangles.len(),
-            back_faces: scene.triangles.len() - scene.input_triangles,
-            sensors: scene.sensors.len(),
-            degenerate_triangles_dropped: scene.dropped_degenerate,
-            junction_triangles_cut: scene.junctions.cut,
-            junction_triangles_added: scene.junctions.added,
-            operators_reused: usize::from(self.operator.is_some() && self.operator_from_cache),
-            ..Counts::default()
-        };
-        if let Some(e) = s.sun_snapping_deg {
-            report.sun.used = true;
-            report.sun.snapping_error_deg = e;
-            report.sun.max_shadow_shift_m = scene_diagonal(scene) * e.to_radians();
-        }
-        self.note_skipped(&s.sources, report);
-    }
-
-    fn note_skipped(&self, sources: &[Source], report: &mut Report) {
-        if sources.is_empty() {
-            report
-                .skipped
-                .push("all projections: the sky emits nothing at this instant".into());
-        }
-        if !self.scene.has_glazing() {
-            report
-                .skipped
-                .push("glazing transmission: the scene has no glazing".into());
-        }
-        if self.scene.triangles.is_empty() {
-            report
-                .skipped
-                .push("projections: the scene has no geometry".into());
-        }
-        if self.scene.faces == crate::scene::Faces::Front {
-            report.skipped.push(
-                "back faces: the scene file says faces = \"front\" (back faces are black)".into(),
-            );
-        }
-    }
-
     /// Every source's mesh weights, in source order (computed in parallel, memoised).
     fn mesh_weights(
         &self,
@@ -628,47 +586,5 @@ impl<'a> Engine<'a> {
                 }
             })
             .collect()
-    }
-}
-
-/// The report's largest stated error, absolute and relative, over `values`.
-fn note_errors(values: &[SensorValue], report: &mut Report) {
-    report.max_lux_err = values.iter().map(|v| v.lux_err).fold(0.0, f64::max);
-    report.max_relative_err = values
-        .iter()
-        .filter_map(|v| v.relative_error(1.0))
-        .fold(0.0, f64::max);
-}
-
-fn scene_diagonal(scene: &Scene) -> f64 {
-    if scene.triangles.is_empty() {
-        return 0.0;
-    }
-    let (lo, hi) = scene.bounds();
-    (hi - lo).length()
-}
-
-/// Source kinds, LDI sizes and fragments, and the leaves the sun alone refines.
-fn count_sources(sources: &[Source], records: &[&DirectionRecord], scene: &Scene, c: &mut Counts) {
-    for (s, r) in sources.iter().zip(records) {
-        match s.key {
-            SourceKey::Sky(_) => c.sky_sources += 1,
-            SourceKey::Ground(_) => c.ground_sources += 1,
-            SourceKey::Sun(_) | SourceKey::SunGrid(_) => c.sun_sources += 1,
-        }
-        let px = r.stats.width as u64 * r.stats.height as u64;
-        c.ldi_pixels += px;
-        c.ldi_fragments += r.stats.fragments;
-        c.splits += r.stats.elements_split;
-        if px > c.ldi_max_size.0 as u64 * c.ldi_max_size.1 as u64 {
-            c.ldi_max_size = (r.stats.width, r.stats.height);
-        }
-        if s.is_sun() {
-            let mut h = Hierarchy::new(scene);
-            for l in &r.leaves {
-                h.insert(l.key);
-            }
-            c.elements_after_sun = h.leaf_count();
-        }
     }
 }
