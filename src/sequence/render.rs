@@ -497,10 +497,11 @@ pub struct RenderReport {
 }
 
 /// How a pixel's stated error is made (`report.json`).
-pub const PIXEL_ERROR_MODEL: &str = "err = 1-sigma of the pixel mean over its \
-    antialiasing samples and over the solution's independent parts + |sky irradiance of the \
-    element - of its parent| x rho/pi + |gathered interreflection - the same on the mesh one \
-    level coarser| + the solve's relative iteration error x gathered interreflection";
+pub const PIXEL_ERROR_MODEL: &str = "err = 1-sigma of the pixel's gathered light (over its \
+    antialiasing samples and the solution's independent parts; filtered pixels: of the local \
+    linear fit over their plane) + |gathered interreflection - the same on the mesh one level \
+    coarser| / 3 (Richardson, second order) + the solve's relative iteration error x \
+    gathered interreflection";
 
 fn median(mut v: Vec<f64>) -> f64 {
     if v.is_empty() {

@@ -3,7 +3,8 @@
 //! chosen ladders (default: sky subdivision, LDI resolution, refinement thresholds,
 //! interreflection lines) on its 21 June 15:00 instant (Perez DNI 750, DHI 110), printed as
 //! the CSV `daystep convergence` writes, and the plot written to OUT.svg (default
-//! `target/convergence-building.svg`). Prints figures; asserts nothing.
+//! `target/convergence-building.svg`). `--repeats N` (default 3) runs each rung N times,
+//! interleaved, as `daystep convergence --repeats` does. Prints figures; asserts nothing.
 
 use daystep::export::plot::error_vs_time_svg;
 use daystep::sequence::convergence::{csv, curves, ladders, recommendation, run_convergence};
@@ -14,10 +15,21 @@ use daystep::site::parse_time;
 mod scenes;
 
 fn main() {
-    let args: Vec<String> = std::env::args()
+    let mut args: Vec<String> = std::env::args()
         .skip(1)
         .filter(|a| a != "--bench")
         .collect();
+    let repeats = match args.iter().position(|a| a == "--repeats") {
+        Some(i) => {
+            let n = args
+                .get(i + 1)
+                .and_then(|v| v.parse().ok())
+                .expect("--repeats N");
+            args.drain(i..i + 2);
+            n
+        }
+        None => 3,
+    };
     let knobs: Vec<String> = args
         .first()
         .map(|k| k.split(',').map(|s| s.trim().to_string()).collect())
@@ -49,7 +61,7 @@ fn main() {
             eprintln!("  [{:>2}/{total}] {knob}: {setting}", done + 1);
         }
     };
-    let rungs = run_convergence(&scene, utc, local, &spec, &ls, 3, &show).unwrap();
+    let rungs = run_convergence(&scene, utc, local, &spec, &ls, repeats, &show).unwrap();
     print!("{}", csv(&rungs));
     println!("{}", recommendation(&rungs, 0.02));
     let curves = curves(&rungs);
