@@ -16,7 +16,7 @@ pub(super) fn coarse_operator(f: &Sparse, mesh: &Mesh) -> Sparse {
         let w = mesh.area[r] / area[c as usize].max(1e-300);
         let (a, b) = (cols.offsets[r] as usize, cols.offsets[r + 1] as usize);
         for k in a..b {
-            let v = cols.vals[k];
+            let v = cols.val(k);
             rows[c as usize].push((
                 cols.cols[k],
                 [v[0] as f64 * w, v[1] as f64 * w, v[2] as f64 * w],

@@ -49,8 +49,7 @@ impl Transport {
     /// one, and the daylight coefficients solve it once (a third of the memory and time).
     pub fn is_grey(&self) -> bool {
         let grey_rgb = |v: &Rgb| v.x == v.y && v.y == v.z;
-        let grey_sparse =
-            |s: &super::sparse::Sparse| s.vals.iter().all(|v| v[0] == v[1] && v[1] == v[2]);
+        let grey_sparse = |s: &super::sparse::Sparse| s.is_grey();
         self.rho.iter().all(grey_rgb)
             && self.coarse_rho.iter().all(grey_rgb)
             && self.parts.iter().all(|p| {
@@ -61,13 +60,11 @@ impl Transport {
             })
     }
 
-    /// Bytes the operator holds: its sparse matrices (4-byte offsets and columns, 12-byte
-    /// values), the per-row reflectance and emission, and the mesh (about 160 bytes per
-    /// row with its element hierarchy).
+    /// Bytes the operator holds: its sparse matrices (4-byte offsets and columns, 4-byte
+    /// values, one per entry when grey, else three), the per-row reflectance and emission,
+    /// and the mesh (about 160 bytes per row with its element hierarchy).
     pub fn bytes(&self) -> u64 {
-        let sparse = |s: &super::sparse::Sparse| {
-            (4 * s.offsets.len() + 4 * s.cols.len() + 12 * s.vals.len()) as u64
-        };
+        let sparse = |s: &super::sparse::Sparse| s.bytes();
         let matrices: u64 = self
             .parts
             .iter()

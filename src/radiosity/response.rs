@@ -270,8 +270,9 @@ pub(super) fn adjoint_block(
     for (j, s) in range.clone().enumerate() {
         for e in g.offsets[s] as usize..g.offsets[s + 1] as usize {
             let r = g.cols[e] as usize;
+            let v = g.val(e);
             for c in 0..ch {
-                gt[(r * ch + c) * w + j] += g.vals[e][c];
+                gt[(r * ch + c) * w + j] += v[c];
             }
         }
     }
@@ -285,19 +286,21 @@ pub(super) fn adjoint_block(
     }
     let mut fill = count.clone();
     let mut cols = vec![0u32; f.cols.len()];
-    let mut vals = vec![[0f32; 3]; f.cols.len()];
+    // `ch` values per entry: a grey block keeps one.
+    let mut vals = vec![0f32; ch * f.cols.len()];
     for (kr, (&r, w)) in rho.iter().zip(f.offsets.windows(2)).enumerate() {
         for e in w[0] as usize..w[1] as usize {
             let i = f.cols[e] as usize;
             let at = fill[i] as usize;
             fill[i] += 1;
             cols[at] = kr as u32;
-            let v = f.vals[e];
-            vals[at] = [
+            let v = f.val(e);
+            let rv = [
                 (r.x * v[0] as f64) as f32,
                 (r.y * v[1] as f64) as f32,
                 (r.z * v[2] as f64) as f32,
             ];
+            vals[at * ch..(at + 1) * ch].copy_from_slice(&rv[..ch]);
         }
     }
     let g_max = gt.iter().fold(0f32, |a, v| a.max(v.abs()));
@@ -315,9 +318,8 @@ pub(super) fn adjoint_block(
             new.copy_from_slice(&gt[i * ch * w..(i + 1) * ch * w]);
             for e in count[i] as usize..count[i + 1] as usize {
                 let src = cols[e] as usize * ch * w;
-                let v = vals[e];
-                for c in 0..ch {
-                    let coef = v[c];
+                let v = &vals[e * ch..(e + 1) * ch];
+                for (c, &coef) in v.iter().enumerate() {
                     if coef == 0.0 {
                         continue;
                     }

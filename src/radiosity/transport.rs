@@ -137,10 +137,11 @@ pub(super) struct Part {
     pub(super) g_coarse: Sparse,
 }
 
-/// One sparse matrix as flat arrays: row offsets, columns, values (RGB).
-pub type SparseArrays = (Vec<u32>, Vec<u32>, Vec<[f32; 3]>);
+/// One sparse matrix as flat arrays: row offsets, columns, values (one per column when
+/// the matrix is grey, else three: R, G, B).
+pub type SparseArrays = (Vec<u32>, Vec<u32>, Vec<f32>);
 /// Borrowed [`SparseArrays`].
-pub type SparseSlices<'a> = (&'a [u32], &'a [u32], &'a [[f32; 3]]);
+pub type SparseSlices<'a> = (&'a [u32], &'a [u32], &'a [f32]);
 
 /// Counters of an operator build.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -284,7 +285,7 @@ impl Transport {
 
     /// The operator as flat arrays, for storage: per part, four sparse matrices (fine
     /// operator, fine gather, coarse operator, coarse gather), each as (row offsets,
-    /// columns, values RGB).
+    /// columns, values: one per column when grey, else R, G, B).
     pub fn export(&self) -> Vec<[SparseSlices<'_>; 4]> {
         self.parts
             .iter()
@@ -320,17 +321,20 @@ impl Transport {
         ];
         for p in parts {
             let mut m = p.iter().zip(shape).map(|((o, c, v), (nr, nc))| {
+                // Grey matrices hold one value per column, others three.
+                let channels = if v.len() == c.len() { 1 } else { 3 };
                 let ok = o.len() == nr + 1
                     && o.first() == Some(&0)
                     && o.windows(2).all(|w| w[0] <= w[1])
                     && *o.last().unwrap_or(&1) as usize == c.len()
-                    && c.len() == v.len()
+                    && v.len() == channels * c.len()
                     && c.iter().all(|&j| (j as usize) < nc)
-                    && v.iter().flatten().all(|x| x.is_finite());
+                    && v.iter().all(|x| x.is_finite());
                 ok.then(|| Sparse {
                     offsets: o.clone(),
                     cols: c.clone(),
                     vals: v.clone(),
+                    channels,
                 })
             });
             let (f, g, f_coarse, g_coarse) = (m.next()??, m.next()??, m.next()??, m.next()??);

@@ -11,14 +11,15 @@ use crate::scene::Scene;
 use crate::trace::Tracer;
 
 /// Section tags: stats, then per part p and matrix m three arrays (offsets, columns,
-/// values) at `TAG_PARTS + 16 p + 4 m + {0, 1, 2}`.
+/// values: one f32 per column when the matrix is grey, else three) at `TAG_PARTS + 16 p + 4 m + {0, 1, 2}`.
 const TAG_STATS: u32 = FIRST_USER_TAG;
 const TAG_PARTS: u32 = FIRST_USER_TAG + 0x100;
 
 /// Version of what an operator record holds, hashed into its key: bumped when the
 /// operator's content changes for the same scene and parameters, so older operators are
-/// rebuilt rather than reused. 2: glazing reflects specularly (Radiance `glass`).
-pub const OPERATOR_VERSION: u32 = 2;
+/// rebuilt rather than reused. 2: glazing reflects specularly (Radiance `glass`). 3: grey
+/// matrices store one value per entry.
+pub const OPERATOR_VERSION: u32 = 3;
 
 /// The cache key of `scene`'s operator for `params` (what its daylight coefficients are
 /// keyed by, with the reflectances).
@@ -96,7 +97,7 @@ fn decode(scene: &Scene, params: &TransportParams, r: &cache::MappedRecord) -> O
             *slot = (
                 r.u32s(tag).ok()?.to_vec(),
                 r.u32s(tag + 1).ok()?.to_vec(),
-                r.section::<[f32; 3]>(tag + 2).ok()?.to_vec(),
+                r.section::<f32>(tag + 2).ok()?.to_vec(),
             );
         }
         parts.push(mats);
