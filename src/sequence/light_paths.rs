@@ -1,10 +1,11 @@
 //! Light paths of operable aperture groups, as honeybee-radiance simulates them for LEED's
-//! blinds: one path per aperture group, in which every other group's glazing is black and
-//! opaque, and one for the static apertures (glazing in no group), in which every group's
-//! glazing is black. Each path is an ordinary run of its own scene variant, so it has its
-//! own cache records, checkpoints and resume; the sum of the paths is the scene with every
-//! group open, less the light that crosses the glazing of two different groups (honeybee's
-//! simplification too: docs/metrics.md).
+//! blinds: one path per aperture group, in which all other glazing (every other group's
+//! and the static glazing) is black and opaque, and one for the static apertures (glazing
+//! in no group), in which every group's glazing is black. Each path is an ordinary run of
+//! its own scene variant, so it has its own cache records, checkpoints and resume. Each
+//! piece of glazing is open in exactly one path, so the sum of the paths is the scene with
+//! every group open, less the light that crosses the glazing of two different paths
+//! (honeybee's simplification too: docs/metrics.md).
 
 use crate::photometry::Rgb;
 use crate::scene::{Material, Scene};
@@ -39,12 +40,20 @@ pub fn triangle_groups(scene: &Scene) -> Vec<Option<u32>> {
         .collect()
 }
 
-/// The scene of one light path: the glazing of every aperture group other than `keep`
-/// (`None`: the static path, every group) made black and opaque. Everything else, the
-/// sensors and the grids included, is unchanged. `None` when no glazing changes: the path
-/// is the scene itself (one group holding all the glazing), and its run is the run's own.
+/// The scene of one light path: all glazing but that of aperture group `keep` made black
+/// and opaque (`None`: the static path, which keeps the glazing of no group and blacks
+/// every group's). Everything else, the sensors and the grids included, is unchanged.
+/// `None` when no glazing changes: the path is the scene itself (one group holding all
+/// the glazing, or no group at all), and its run is the run's own.
 pub fn path_scene(scene: &Scene, of: &[Option<u32>], keep: Option<u32>) -> Option<Scene> {
-    if of.iter().all(|g| g.is_none() || *g == keep) {
+    let glazing = |t: &crate::scene::Triangle| scene.materials[t.material as usize].is_glazing();
+    let closed: Vec<bool> = scene
+        .triangles
+        .iter()
+        .zip(of)
+        .map(|(t, g)| glazing(t) && *g != keep)
+        .collect();
+    if !closed.contains(&true) {
         return None;
     }
     let mut s = scene.clone();
@@ -55,8 +64,8 @@ pub fn path_scene(scene: &Scene, of: &[Option<u32>], keep: Option<u32>) -> Optio
         tf: Rgb::ZERO,
         ke: Rgb::ZERO,
     });
-    for (t, g) in s.triangles.iter_mut().zip(of) {
-        if g.is_some() && *g != keep {
+    for (t, &c) in s.triangles.iter_mut().zip(&closed) {
+        if c {
             t.material = black;
         }
     }
