@@ -2,50 +2,32 @@
 //! per entry when every entry is grey (the same in R, G and B), else three; a row–vector
 //! product and column aggregation (for the coarse level).
 
-use crate::photometry::Rgb;
+use crate::photometry::{ChannelValues, Rgb};
 
-/// Sparse rows: row r holds (column, value) pairs `cols[offsets[r]..offsets[r+1]]`, the
-/// values `vals[channels * k..channels * (k + 1)]` of entry k.
-#[derive(Clone, Debug)]
+/// Sparse rows: row r holds (column, value) pairs `cols[offsets[r]..offsets[r+1]]`, entry
+/// k's value `vals.get(k)`.
+#[derive(Clone, Debug, Default)]
 pub(super) struct Sparse {
     pub(super) offsets: Vec<u32>,
     pub(super) cols: Vec<u32>,
-    /// `channels` values per entry.
-    pub(super) vals: Vec<f32>,
-    /// 1 when every entry is grey, else 3 (R, G, B).
-    pub(super) channels: usize,
-}
-
-impl Default for Sparse {
-    fn default() -> Self {
-        Sparse {
-            offsets: Vec::new(),
-            cols: Vec::new(),
-            vals: Vec::new(),
-            channels: 1,
-        }
-    }
+    pub(super) vals: ChannelValues,
 }
 
 impl Sparse {
     /// Entry `k`'s value in R, G and B.
     #[inline]
     pub(super) fn val(&self, k: usize) -> [f32; 3] {
-        if self.channels == 1 {
-            [self.vals[k]; 3]
-        } else {
-            [self.vals[3 * k], self.vals[3 * k + 1], self.vals[3 * k + 2]]
-        }
+        self.vals.get(k)
     }
 
     /// Whether every entry is grey (then stored with one value each).
     pub(super) fn is_grey(&self) -> bool {
-        self.channels == 1
+        self.vals.is_grey()
     }
 
     /// Bytes of its arrays.
     pub(super) fn bytes(&self) -> u64 {
-        4 * (self.offsets.len() + self.cols.len() + self.vals.len()) as u64
+        4 * (self.offsets.len() + self.cols.len()) as u64 + self.vals.bytes()
     }
 
     pub(super) fn row_dot(&self, r: usize, x: &[Rgb]) -> Rgb {
@@ -63,28 +45,18 @@ impl Sparse {
         self.offsets.len().saturating_sub(1)
     }
 
-    /// Builds rows from (row, col, value) triples sorted by (row, col), no duplicates;
-    /// one value per entry for as long as every value is grey.
+    /// Builds rows from (row, col, value) triples sorted by (row, col), no duplicates.
     pub(super) fn from_sorted(
         n_rows: usize,
         entries: impl Iterator<Item = (u32, u32, [f32; 3])>,
     ) -> Sparse {
         let mut offsets = vec![0u32; n_rows + 1];
         let mut cols = Vec::new();
-        let mut vals: Vec<f32> = Vec::new();
-        let mut channels = 1;
+        let mut vals = ChannelValues::default();
         for (r, c, v) in entries {
             offsets[r as usize + 1] += 1;
             cols.push(c);
-            if channels == 1 && (v[0] != v[1] || v[1] != v[2]) {
-                vals = vals.iter().flat_map(|&g| [g; 3]).collect();
-                channels = 3;
-            }
-            if channels == 1 {
-                vals.push(v[0]);
-            } else {
-                vals.extend_from_slice(&v);
-            }
+            vals.push(v);
         }
         for r in 0..n_rows {
             offsets[r + 1] += offsets[r];
@@ -93,7 +65,6 @@ impl Sparse {
             offsets,
             cols,
             vals,
-            channels,
         }
     }
 
@@ -137,20 +108,15 @@ mod tests {
     use super::*;
 
     #[test]
-    fn grey_matrices_keep_one_value_per_entry_and_read_as_rgb() {
+    fn grey_and_coloured_rows_read_as_rgb() {
         let grey = [(0, 1, [0.5f32; 3]), (1, 0, [0.25; 3])];
         let g = Sparse::from_sorted(2, grey.into_iter());
         assert!(g.is_grey());
-        assert_eq!(g.vals, vec![0.5, 0.25]);
         assert_eq!(g.bytes(), 4 * (3 + 2 + 2));
-        // A coloured entry after grey ones: every value becomes three, the earlier ones
-        // repeated, so each entry reads as before.
         let mixed = [(0, 1, [0.5f32; 3]), (1, 0, [0.1, 0.2, 0.3])];
         let m = Sparse::from_sorted(2, mixed.into_iter());
         assert!(!m.is_grey());
-        assert_eq!(m.vals.len(), 6);
-        assert_eq!(m.val(0), [0.5; 3]);
-        assert_eq!(m.val(1), [0.1, 0.2, 0.3]);
+        assert_eq!((m.val(0), m.val(1)), ([0.5; 3], [0.1, 0.2, 0.3]));
         let x = [Rgb::new(1.0, 2.0, 3.0), Rgb::new(4.0, 5.0, 6.0)];
         assert_eq!(g.row_dot(0, &x), Rgb::new(2.0, 2.5, 3.0));
         let c = |v: f32, x: f64| f64::from(v) * x;

@@ -47,7 +47,7 @@ use super::mesh::Mesh;
 use super::sparse::Sparse;
 use super::MAX_RHO;
 use crate::math::rng::mix64;
-use crate::photometry::Rgb;
+use crate::photometry::{ChannelValues, Rgb};
 use crate::projection::ProjectionScene;
 use crate::scene::{Scene, Sensor};
 use crate::trace::Tracer;
@@ -291,7 +291,7 @@ impl Transport {
             .iter()
             .map(|p| {
                 [&p.f, &p.g, &p.f_coarse, &p.g_coarse]
-                    .map(|m| (&m.offsets[..], &m.cols[..], &m.vals[..]))
+                    .map(|m| (&m.offsets[..], &m.cols[..], m.vals.as_slice()))
             })
             .collect()
     }
@@ -322,19 +322,17 @@ impl Transport {
         for p in parts {
             let mut m = p.iter().zip(shape).map(|((o, c, v), (nr, nc))| {
                 // Grey matrices hold one value per column, others three.
-                let channels = if v.len() == c.len() { 1 } else { 3 };
+                let vals = ChannelValues::from_raw(v.clone(), c.len())?;
                 let ok = o.len() == nr + 1
                     && o.first() == Some(&0)
                     && o.windows(2).all(|w| w[0] <= w[1])
                     && *o.last().unwrap_or(&1) as usize == c.len()
-                    && v.len() == channels * c.len()
                     && c.iter().all(|&j| (j as usize) < nc)
                     && v.iter().all(|x| x.is_finite());
                 ok.then(|| Sparse {
                     offsets: o.clone(),
                     cols: c.clone(),
-                    vals: v.clone(),
-                    channels,
+                    vals,
                 })
             });
             let (f, g, f_coarse, g_coarse) = (m.next()??, m.next()??, m.next()??, m.next()??);

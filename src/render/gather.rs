@@ -32,7 +32,7 @@
 use super::denoise::{filter, PixelOut};
 use super::image::{Image, Quantity};
 use crate::math::rng::{mix64, uniform};
-use crate::photometry::{grey, Rgb};
+use crate::photometry::{grey, ChannelValues, Rgb};
 use crate::radiosity::{Mesh, Transport, TransportState};
 use crate::scene::view::View;
 use crate::sky::Sky;
@@ -139,8 +139,11 @@ pub struct ViewGeometry {
     samples: Vec<Sample>,
     /// Per pixel, how many antialiasing samples it has (0: outside the image's circle).
     aa_count: Vec<u32>,
-    /// Gather entries: mesh row and the irradiance weight of its radiosity (τ / rays).
-    entries: Vec<(u32, [f32; 3])>,
+    /// Gather entries' mesh rows (or sky bins, [`SKY_BIN`]).
+    rows: Vec<u32>,
+    /// Gather entries' irradiance weights of their radiosity (τ / rays): one value each
+    /// while all are grey.
+    weights: ChannelValues,
     /// Rays traced to build it.
     pub rays: u64,
 }
@@ -176,19 +179,23 @@ impl ViewGeometry {
             offsets: Vec::with_capacity(w * h + 1),
             samples: Vec::new(),
             aa_count: Vec::with_capacity(w * h),
-            entries: Vec::new(),
+            rows: Vec::new(),
+            weights: ChannelValues::default(),
             rays: 0,
         };
         g.offsets.push(0);
         for (mut samples, entries, aa, rays) in per_pixel {
-            let base = g.entries.len() as u32;
+            let base = g.rows.len() as u32;
             for s in &mut samples {
                 if let Kind::Surface(f) = &mut s.kind {
                     f.start += base;
                 }
             }
             g.samples.extend(samples);
-            g.entries.extend(entries);
+            for (row, wt) in entries {
+                g.rows.push(row);
+                g.weights.push(wt);
+            }
             g.offsets.push(g.samples.len() as u32);
             g.aa_count.push(aa);
             g.rays += rays;
@@ -200,8 +207,6 @@ impl ViewGeometry {
     pub fn encode(&self, key: &crate::cache::RecordKey) -> Vec<u8> {
         use crate::cache::Section;
         let flat: Vec<FlatSample> = self.samples.iter().map(FlatSample::of).collect();
-        let rows: Vec<u32> = self.entries.iter().map(|e| e.0).collect();
-        let weights: Vec<[f32; 3]> = self.entries.iter().map(|e| e.1).collect();
         let rays = [self.rays as f64];
         crate::cache::encode(
             key,
@@ -209,8 +214,8 @@ impl ViewGeometry {
                 Section::u32s(TAG_OFFSETS, &self.offsets),
                 Section::u32s(TAG_AA, &self.aa_count),
                 Section::of(TAG_SAMPLES, &flat),
-                Section::u32s(TAG_ENTRIES, &rows),
-                Section::of(TAG_ENTRIES + 16, &weights),
+                Section::u32s(TAG_ENTRIES, &self.rows),
+                Section::of(TAG_ENTRIES + 16, self.weights.as_slice()),
                 Section::f64s(TAG_RAYS, &rays),
             ],
         )
@@ -230,11 +235,15 @@ impl ViewGeometry {
         let aa_count = r.u32s(TAG_AA).ok()?.to_vec();
         let flat = r.section::<FlatSample>(TAG_SAMPLES).ok()?;
         let rows_of = r.u32s(TAG_ENTRIES).ok()?;
-        let weights = r.section::<[f32; 3]>(TAG_ENTRIES + 16).ok()?;
+        // One weight per entry when all are grey, else three.
+        let weights = ChannelValues::from_raw(
+            r.section::<f32>(TAG_ENTRIES + 16).ok()?.to_vec(),
+            rows_of.len(),
+        )?;
         let rays = *r.f64s(TAG_RAYS).ok()?.first()?;
         let ok = offsets.len() == n + 1
             && aa_count.len() == n
-            && rows_of.len() == weights.len()
+            && weights.as_slice().iter().all(|w| w.is_finite())
             && offsets.windows(2).all(|w| w[0] <= w[1])
             && offsets.last().copied() == Some(flat.len() as u32)
             && offsets.first() == Some(&0);
@@ -261,11 +270,8 @@ impl ViewGeometry {
             offsets,
             samples,
             aa_count,
-            entries: rows_of
-                .iter()
-                .copied()
-                .zip(weights.iter().copied())
-                .collect(),
+            rows: rows_of.to_vec(),
+            weights,
             rays: rays as u64,
         })
     }
@@ -273,7 +279,8 @@ impl ViewGeometry {
     /// Bytes the geometry holds (for reports and memory budgets).
     pub fn bytes(&self) -> usize {
         self.samples.len() * std::mem::size_of::<Sample>()
-            + self.entries.len() * std::mem::size_of::<(u32, [f32; 3])>()
+            + self.rows.len() * 4
+            + self.weights.bytes() as usize
             + (self.offsets.len() + self.aa_count.len()) * 4
     }
 
@@ -342,11 +349,10 @@ impl ViewGeometry {
                                         * c;
                                 }
                             }
-                            let es = &self.entries[f.start as usize..(f.start + f.len) as usize];
                             let (mut fine, mut coarse, mut sky_e) =
                                 (Rgb::ZERO, Rgb::ZERO, Rgb::ZERO);
-                            for &(row, wt) in es {
-                                let wt = rgb(wt);
+                            for e in f.start as usize..(f.start + f.len) as usize {
+                                let (row, wt) = (self.rows[e], rgb(self.weights.get(e)));
                                 if row & SKY_BIN != 0 {
                                     sky_e += wt * sky_bins[(row & !SKY_BIN) as usize];
                                     continue;
