@@ -265,3 +265,72 @@ fn four_processes_share_one_empty_cache_folder() {
     let v = cache::verify(&cd).unwrap();
     assert!(v.is_clean() && v.ok > 0, "{v:?}");
 }
+
+/// The union of an annual run's sky cuts (which nodes its steps use) is a cache record: a
+/// warm run reads it instead of cutting every step's sky twice and writes the same bytes;
+/// a record that lacks nodes the steps need is found out and made again.
+#[test]
+fn a_warm_annual_run_reads_its_cuts_and_a_short_record_is_made_again() {
+    use daystep::sequence::annual::{run_annual, AnnualOptions, RunControl};
+    let d = tempfile::tempdir().unwrap();
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office");
+    let scene = Scene::load(&src.join("scene.toml")).unwrap();
+    let weather = daystep::weather::read_weather(&src.join("weather.epw")).unwrap();
+    let store = Store::open(&d.path().join("cache"), cache::DEFAULT_MAX_BYTES);
+    let go = std::sync::atomic::AtomicBool::new(false);
+    let quiet = |_: usize, _: usize| {};
+    let control = RunControl {
+        stop: &go,
+        progress: &quiet,
+    };
+    let day = chrono::NaiveDate::from_ymd_opt(2021, 6, 21);
+    let opts = AnnualOptions {
+        start: day,
+        end: day,
+        ..AnnualOptions::default()
+    };
+    let q = Quality::preset("draft").unwrap();
+    let run = |name: &str| {
+        let out = d.path().join(name);
+        let r = run_annual(&scene, &weather, &q, &store, &out, &opts, &control).unwrap();
+        let ill = std::fs::read(out.join("illuminance.csv")).unwrap();
+        (
+            r.coefficients
+                .expect("annual by coefficients")
+                .cuts_from_cache,
+            ill,
+        )
+    };
+    let (cold_cached, cold) = run("cold");
+    assert!(!cold_cached, "an empty cache holds no cuts");
+    let (warm_cached, warm) = run("warm");
+    assert!(warm_cached, "the second run reads the cuts");
+    assert_eq!(warm, cold, "the same bytes from the cached cuts");
+
+    // Rewrite the cuts record, valid in every byte, with its first node only.
+    let cuts = std::fs::read_dir(d.path().join("cache"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| {
+            std::fs::read(p).ok().is_some_and(|b| {
+                cache::Record::parse(&b).is_ok_and(|r| r.key().kind == cache::KIND_CUTS)
+            })
+        })
+        .expect("a cuts record");
+    let bytes = std::fs::read(&cuts).unwrap();
+    let r = cache::Record::parse(&bytes).unwrap();
+    let key = r.key();
+    let tag = r.sections()[0].tag;
+    let first: Vec<[u64; 3]> = r.section::<[u64; 3]>(tag).unwrap()[..1].to_vec();
+    std::fs::write(
+        &cuts,
+        cache::encode(&key, &[cache::Section::of(tag, &first)]),
+    )
+    .unwrap();
+    let (short_cached, again) = run("short");
+    assert!(
+        !short_cached,
+        "a record missing the steps' nodes is not trusted"
+    );
+    assert_eq!(again, cold);
+}

@@ -128,6 +128,10 @@ pub const KIND_COEFFICIENTS: u8 = 5;
 /// Record kind: a camera's traced geometry for renders (primary hits and gather rows;
 /// `scene` hashes the operator's key, the view and the render options).
 pub const KIND_VIEW: u8 = 6;
+/// Record kind: the direction nodes a run's steps use, the union of their adaptive sky
+/// cuts (direction 0, resolution 0; `scene` hashes the steps' times and skies, the site,
+/// the ground reflectance and the sky parameters, never the geometry).
+pub const KIND_CUTS: u8 = 7;
 // Kinds 3..=255 are free for later record types (global-line bundles, depth maps, …).
 
 /// Lossless 64-bit id of a sun-grid cell: spacing δ (µdeg) in the top 32 bits, the altitude

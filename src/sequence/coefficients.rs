@@ -27,11 +27,10 @@
 //!   reflectance change recomputes them and reuses the projections and the operator; a
 //!   weather or site change reuses everything.
 
-use super::config::{Quality, SkySpec};
+use super::config::SkySpec;
 use super::direct::mesh_weights;
 use super::directions::Directions;
 use super::estimate::SensorValue;
-use super::sky::{build_sky, sources_for};
 use super::step::StepTime;
 use crate::cache::{self, RecordKey, SceneHash, Section, FIRST_USER_TAG};
 use crate::error::{Error, Result};
@@ -39,13 +38,11 @@ use crate::photometry::{from_lux, lux, Rgb};
 use crate::radiosity::{DirectionTerms, Transport, TransportParams, TransportSensor};
 use crate::scene::Scene;
 use crate::sensors::SensorDirect;
-use crate::site::solar_position::solar_position;
 use crate::sky::Sky;
 use crate::sources::{Source, SourceKey, SunGrid};
-use chrono::Datelike;
 use rayon::prelude::*;
 use serde::Serialize;
-use std::collections::{BTreeMap, HashMap};
+use std::collections::HashMap;
 use std::sync::Mutex;
 use std::time::Instant;
 
@@ -126,6 +123,9 @@ struct NodeData {
 /// What preparing the coefficients did (`report.json`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct CoefficientStats {
+    /// Whether the union of the steps' cuts (which nodes they use) came from the cache
+    /// ([`super::cuts`]) rather than from a cut of every step.
+    pub cuts_from_cache: bool,
     /// Sky and ground nodes the run's steps use.
     pub nodes: usize,
     /// Sun-grid vertices the site's sun visits.
@@ -159,20 +159,6 @@ pub struct Coefficients {
     coarse: Mutex<HashMap<SourceKey, std::sync::Arc<Vec<f32>>>>,
     /// Preparation counters.
     pub stats: CoefficientStats,
-}
-
-/// The sky of one step and its sources at the run's quality (`None` for a sky that
-/// cannot be built: the step itself reports why).
-fn step_sources(
-    scene: &Scene,
-    quality: &Quality,
-    at: &StepTime,
-    spec: &SkySpec,
-) -> Option<(Sky, Vec<Source>)> {
-    let sun = solar_position(at.utc, &scene.site);
-    let sky = build_sky(spec, &sun, at.local.ordinal(), scene.ground_reflectance).ok()?;
-    let s = sources_for(&sky, quality).sources;
-    Some((sky, s))
 }
 
 /// The grey value of a grey RGB quantity.
@@ -228,49 +214,11 @@ impl Coefficients {
         let k = scene.sensors.len();
         let store = dirs.store();
         let hash = coefficient_hash(scene, dirs, &quality.transport);
-        // The sources of every step, deduplicated by key (deterministic order).
-        // Folded per thread and merged, so the year's per-step source lists are never all
-        // held at once. A key's source is the same direction and vertices whichever step
-        // it came from (only those are read here), so the merge order does not matter.
-        type Acc = (BTreeMap<SourceKey, Source>, Vec<(usize, Sky)>);
-        let (wanted, mut indexed): Acc = steps
-            .par_iter()
-            .enumerate()
-            .fold(
-                || (BTreeMap::new(), Vec::new()),
-                |(mut m, mut skies): Acc, (i, (at, spec))| {
-                    if let Some((sky, s)) = step_sources(scene, quality, at, spec) {
-                        for src in s {
-                            if let SourceKey::Sun(_) = src.key {
-                                for (v, _) in grid.corners(src.true_direction) {
-                                    let gs = grid.source(v);
-                                    m.entry(gs.key).or_insert(gs);
-                                }
-                            } else {
-                                m.entry(src.key).or_insert(src);
-                            }
-                        }
-                        skies.push((i, sky));
-                    }
-                    (m, skies)
-                },
-            )
-            .reduce(
-                || (BTreeMap::new(), Vec::new()),
-                |(mut a, mut sa), (b, sb)| {
-                    for (k, v) in b {
-                        a.entry(k).or_insert(v);
-                    }
-                    sa.extend(sb);
-                    (a, sa)
-                },
-            );
-        indexed.sort_by_key(|e| e.0);
-        let mut skies: Vec<Option<Sky>> = (0..steps.len()).map(|_| None).collect();
-        for (i, sky) in indexed {
-            skies[i] = Some(sky);
-        }
+        // The nodes of every step's cut (and each step's sky where they were made here).
+        let union = super::cuts::union(scene, quality, steps, store);
+        let (wanted, skies) = (union.nodes, union.skies);
         let mut stats = CoefficientStats {
+            cuts_from_cache: union.from_cache,
             nodes: wanted.values().filter(|s| !s.is_sun()).count(),
             sun_grid_vertices: wanted.values().filter(|s| s.is_sun()).count(),
             sun_grid_deg: grid.spacing_deg,

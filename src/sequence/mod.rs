@@ -5,7 +5,7 @@
 //! Modules in pipeline order: the run's knobs ([`config`]); the step's stages — sky and
 //! sources ([`sky`]), per-direction data ([`directions`]), the operator ([`operator`]),
 //! direct light onto the mesh and the sensors ([`direct`]), daylight coefficients for
-//! annual steps ([`coefficients`]), the stated error
+//! annual steps ([`coefficients`], over the union of the steps' cuts, [`cuts`]), the stated error
 //! ([`estimate`]) — and the step that runs them ([`step`]); then the sequences built from
 //! it ([`instant`], [`df`], [`convergence`], [`annual`] with its [`surfaces`] export) and
 //! their [`report`].
@@ -15,6 +15,7 @@ pub mod sky;
 pub mod directions;
 pub mod operator;
 pub mod direct;
+pub mod cuts;
 pub mod coefficients;
 pub mod estimate;
 pub mod step;

@@ -8,7 +8,7 @@ pub mod subdivision;
 pub mod sun_grid;
 
 pub use direction_key::{SkyNodeKey, SunKey};
-pub use subdivision::{sky_sources, sun_source, SkyParams};
+pub use subdivision::{node_source, sky_sources, sun_source, SkyParams};
 pub use sun_grid::SunGrid;
 
 use crate::photometry::Rgb;

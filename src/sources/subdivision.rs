@@ -117,6 +117,13 @@ fn node_radiance_split(sky: &Sky, key: SkyNodeKey, kids: &[[DVec3; 3]; 4]) -> (R
     (mean, hi - lo, l)
 }
 
+/// Sky or ground node `key` as a direction only (its centre, vertices and solid angle; no
+/// radiance): bit-identical in those to the source a cut makes of it, since the cut's
+/// vertices are the same splits [`SkyNodeKey::vertices`] repeats.
+pub fn node_source(key: SkyNodeKey) -> Source {
+    make_source(key, key.vertices(), Rgb::ZERO, [Rgb::ZERO; 4])
+}
+
 fn make_source(key: SkyNodeKey, v: [DVec3; 3], radiance: Rgb, children: [Rgb; 4]) -> Source {
     let omega = spherical_triangle::solid_angle(v[0], v[1], v[2]);
     let dir = spherical_triangle::centre(v[0], v[1], v[2]);
