@@ -175,12 +175,23 @@ fn cache_counters(out: &Path) -> (u64, u64, u64) {
 }
 
 /// The record files of a cache folder.
-fn record_names(cache: &Path) -> std::collections::BTreeSet<String> {
+/// The record files in `cache`: (the cuts' unions, every other record). A cut union lists
+/// the nodes of one run's steps, so each shard stores its own (`sequence::cuts`).
+fn record_names(
+    cache: &Path,
+) -> (
+    std::collections::BTreeSet<String>,
+    std::collections::BTreeSet<String>,
+) {
     std::fs::read_dir(cache)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .filter(|n| n.ends_with(".dsr"))
-        .collect()
+        .partition(|n| {
+            let bytes = std::fs::read(cache.join(n)).unwrap();
+            daystep::cache::Record::parse(&bytes)
+                .is_ok_and(|r| r.key().kind == daystep::cache::KIND_CUTS)
+        })
 }
 
 #[test]
@@ -273,8 +284,14 @@ fn four_concurrent_shard_processes_merge_to_one_run() {
     }
     let v = daystep::cache::verify(&shared).unwrap();
     assert!(v.is_clean() && v.temp_files == 0, "{v:?}");
-    let names = record_names(&shared);
-    assert_eq!(names, record_names(&own));
+    let (shard_cuts, names) = record_names(&shared);
+    let (own_cuts, own_names) = record_names(&own);
+    assert_eq!(names, own_names);
+    assert_eq!(
+        (shard_cuts.len(), own_cuts.len()),
+        (4, 1),
+        "one cut union per run"
+    );
     for n in &names {
         // Whichever shard's rename won, the record is the one the one run computed.
         assert!(read(&shared, n) == read(&own, n), "record {n} differs");

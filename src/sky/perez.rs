@@ -260,6 +260,31 @@ impl PerezParameters {
     }
 }
 
+/// Skies whose horizontal integral a process keeps, at most: about 64 bytes each.
+const REMEMBERED: usize = 1 << 16;
+
+/// [`PerezParameters::horizontal_integral`], remembered for the process: a LEED run builds
+/// each step's sky once per light path, and this integral (128 × 128 evaluations of the
+/// distribution) was a fifth of a warm path run. The value is the same bits either way;
+/// the memo forgets everything when it holds [`REMEMBERED`] skies.
+fn remembered_horizontal_integral(p: &PerezParameters, sun_dir: DVec3) -> f64 {
+    use std::collections::HashMap;
+    use std::sync::{Mutex, OnceLock};
+    static MEMO: OnceLock<Mutex<HashMap<[u64; 8], f64>>> = OnceLock::new();
+    let key = [p.a, p.b, p.c, p.d, p.e, sun_dir.x, sun_dir.y, sun_dir.z].map(f64::to_bits);
+    let memo = MEMO.get_or_init(|| Mutex::new(HashMap::new()));
+    if let Some(&v) = memo.lock().expect("memo").get(&key) {
+        return v;
+    }
+    let v = p.horizontal_integral(sun_dir);
+    let mut m = memo.lock().expect("memo");
+    if m.len() >= REMEMBERED {
+        m.clear();
+    }
+    m.insert(key, v);
+    v
+}
+
 /// The normalised Perez distribution.
 struct PerezDistribution {
     params: PerezParameters,
@@ -340,7 +365,7 @@ pub fn sky(
             sun_dir,
             scale: 1.0,
         };
-        let e_unit = dist.params.horizontal_integral(sun_dir);
+        let e_unit = remembered_horizontal_integral(&dist.params, sun_dir);
         if e_unit.is_finite() && e_unit > 0.0 {
             dist.scale = e_vd / EFFICACY_LM_PER_W / e_unit;
         } else {
@@ -575,6 +600,24 @@ mod tests {
             assert!(fine > 0.0, "{alt}°: a dark sky tests nothing");
             assert!((fast / fine - 1.0).abs() < 2e-4, "{alt}°: {fast} vs {fine}");
         }
+    }
+
+    #[test]
+    fn the_remembered_horizontal_integral_is_the_integral() {
+        let d = direction_from_alt_az(35.0, 200.0);
+        let p = parameters(650.0, 110.0, d.z.acos(), 80, 4.0);
+        let direct = p.horizontal_integral(d);
+        for _ in 0..2 {
+            assert_eq!(
+                remembered_horizontal_integral(&p, d).to_bits(),
+                direct.to_bits()
+            );
+        }
+        let q = PerezParameters { c: p.c + 1.0, ..p };
+        assert_eq!(
+            remembered_horizontal_integral(&q, d).to_bits(),
+            q.horizontal_integral(d).to_bits()
+        );
     }
 
     #[test]
