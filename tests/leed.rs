@@ -14,7 +14,7 @@ use daystep::sequence::Quality;
 use daystep::weather::read_weather;
 use glam::{DVec2, DVec3};
 use std::path::Path;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// A 6 × 4 × 3 m room with a south, an east and a north window, 24 sensors at 0.8 m, at
 /// the sample office's site; the south and east windows' glazing materials are groups
@@ -225,6 +225,76 @@ fn blinds_close_what_the_two_percent_rule_needs_and_paths_sum_to_the_room() {
         assert!(
             (da - expect).abs() <= step * borderline as f64 + 1e-9,
             "sensor {k}: DA {da} against {expect} from the paths"
+        );
+    }
+}
+
+/// An interrupted `--leed` run, stopped while the light paths are prepared and again
+/// after its first batch of days, resumes to the same bytes as one uninterrupted run:
+/// the paths' rows of the resumed days are evaluated one step at a time, the others a
+/// batch of steps at once, and both give the same bits.
+#[test]
+fn an_interrupted_leed_run_resumes_to_the_same_paths_and_numbers() {
+    let d = tempfile::tempdir().unwrap();
+    let office = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office/weather.epw");
+    let weather = read_weather(&office).unwrap();
+    let scene = room(weather.site);
+    let q = Quality::preset("draft").unwrap();
+    let store = Store::open(&d.path().join("cache"), daystep::cache::DEFAULT_MAX_BYTES);
+    let date = |s| Some(chrono::NaiveDate::parse_from_str(s, "%Y-%m-%d").unwrap());
+    // Twelve days: two batches of days.
+    let opts = AnnualOptions {
+        start: date("2021-12-10"),
+        end: date("2021-12-21"),
+        leed: true,
+        ..AnnualOptions::default()
+    };
+    let go = AtomicBool::new(false);
+    let quiet = |_: usize, _: usize| {};
+    let control = RunControl {
+        stop: &go,
+        progress: &quiet,
+    };
+    let one = d.path().join("one");
+    let r = run_annual(&scene, &weather, &q, &store, &one, &opts, &control).unwrap();
+    assert!(!r.interrupted);
+    let stopped = d.path().join("stopped");
+    // Progress reports count the paths while they are prepared (three, here), then the
+    // run's 288 steps.
+    for (stop_in_steps, resumed) in [(false, false), (true, false), (false, true)] {
+        let stop = AtomicBool::new(false);
+        let stop_at = |done: usize, total: usize| {
+            if done > 0 && (total > 10) == stop_in_steps {
+                stop.store(true, Ordering::SeqCst);
+            }
+        };
+        let c = RunControl {
+            stop: &stop,
+            progress: &stop_at,
+        };
+        let control = if resumed { &control } else { &c };
+        let r = run_annual(&scene, &weather, &q, &store, &stopped, &opts, control).unwrap();
+        assert_eq!(r.interrupted, !resumed, "{r:?}");
+        if stop_in_steps {
+            assert!(r.computed > 0 && r.computed < 288, "{r:?}");
+        }
+        if resumed {
+            assert!(r.resumed > 0, "{r:?}");
+        }
+    }
+    for f in [
+        "illuminance.csv",
+        "leed.json",
+        "leed_blinds.csv",
+        "leed_sensors.csv",
+        "paths/south/illuminance.csv",
+        "paths/east/direct_sun.csv",
+        "paths/__static_apertures__/illuminance.csv",
+    ] {
+        assert_eq!(
+            std::fs::read(one.join(f)).unwrap(),
+            std::fs::read(stopped.join(f)).unwrap(),
+            "{f} after the resumes"
         );
     }
 }

@@ -45,6 +45,7 @@ pub use record::{
 };
 pub use store::{
     clear, dir_stats, verify, CacheStats, DirStats, Store, VerifyReport, DEFAULT_MAX_BYTES,
+    READ_MAX_BYTES,
 };
 
 /// Version of the record format and of the scene-hash content; bump on any change to

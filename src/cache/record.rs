@@ -494,6 +494,27 @@ impl MappedRecord {
         })
     }
 
+    /// Reads the `len` bytes of `file` into an 8-byte-aligned buffer and validates them as
+    /// a record of `expected`: for small records, where a map's set-up and, above all, its
+    /// unmapping (a TLB shoot-down across the process's threads) cost more than a copy.
+    pub(crate) fn read_from(
+        file: &mut std::fs::File,
+        len: usize,
+        expected: &RecordKey,
+    ) -> Result<Self, Invalid> {
+        use std::io::Read;
+        let mut words = vec![0u64; len.div_ceil(8)];
+        file.read_exact(&mut bytemuck::cast_slice_mut::<u64, u8>(&mut words)[..len])
+            .map_err(|e| Invalid::Unreadable(e.to_string()))?;
+        let r = Record::validate(&bytemuck::cast_slice::<u64, u8>(&words)[..len], expected)?;
+        let (key, sections) = (r.key, r.sections);
+        Ok(MappedRecord {
+            data: Backing::Owned { words, len },
+            key,
+            sections,
+        })
+    }
+
     /// Copies `bytes` into an 8-byte-aligned buffer and validates it as a record of
     /// `expected` (for records held in memory rather than in a cache folder).
     ///

@@ -398,7 +398,8 @@ pub struct AnnualArgs {
     pub surfaces: bool,
     /// LEED v4.1 Daylight Option 1 with operable blinds (sDA300/50% with the blind
     /// schedule, ASE1000,250h, points): leed.json, leed_blinds.csv, leed_sensors.csv. Each
-    /// aperture group's light is a run of its own under paths/.
+    /// aperture group's light path is evaluated beside the run's steps and written under
+    /// paths/.
     #[arg(long)]
     pub leed: bool,
     /// EN 17037 daylight provision (minimum, medium, high): en17037.json. Needs the whole

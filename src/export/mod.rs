@@ -41,6 +41,10 @@ pub fn format_time(time: NaiveDateTime) -> String {
 /// A value with three decimals; −0 (and values rounding to −0.000) written as `0.000`, so
 /// equal results give equal bytes.
 pub fn format_value(v: f64) -> String {
+    // Night steps are half of an annual series: their zeros skip the float formatting.
+    if v == 0.0 {
+        return "0.000".into();
+    }
     let s = format!("{v:.3}");
     if s == "-0.000" {
         "0.000".into()

@@ -18,7 +18,9 @@
 
 use super::config::{Quality, SkySpec};
 use super::merge::parse_times;
-use super::report::StageTimes;
+use super::path_pass::{PathValues, Paths};
+use super::report::{Report, StageTimes};
+use super::sky::sources_for;
 use super::step::{Engine, EngineOptions, StepTime};
 use crate::cache::Store;
 use crate::error::{Error, Result};
@@ -29,6 +31,8 @@ pub use super::merge::{merge, write_metrics, write_report_page};
 use crate::radiosity::TransportState;
 use crate::scene::Scene;
 use crate::site::solar_position::solar_position;
+use crate::sky::Sky;
+use crate::sources::Source;
 use crate::weather::{Weather, WeatherRecord};
 use chrono::{NaiveDate, NaiveDateTime};
 use rayon::prelude::*;
@@ -169,6 +173,11 @@ struct StepOut {
     surfaces: Vec<f64>,
     rel_err: Vec<f32>,
     sweeps: u32,
+    /// The light paths' values of a lit step (`annual --leed` with aperture groups).
+    paths: Option<PathValues>,
+    /// The lit step's cut, when the paths evaluate a batch of steps at once
+    /// ([`Paths::batched`]).
+    path_cut: Option<Vec<Source>>,
 }
 
 /// How a caller steers a long run: `stop` is polled between batches of days (set it from
@@ -259,17 +268,23 @@ pub fn run_annual(
             values_only: opts.series_only,
         },
     );
+    // Every lit step's sky, so the coefficients of all its sources are computed (or read)
+    // together before the steps run.
+    let lit: Vec<(StepTime, SkySpec)> = days
+        .iter()
+        .flatten()
+        .filter(|s| matches!(classify(scene, s.record), Kind::Day { .. }))
+        .map(|s| (step_time(scene, s.record), perez(s.record)))
+        .collect();
     if opts.daylight_coefficients && !opts.surfaces {
-        // Every lit step's sky, so the coefficients of all its sources are computed (or
-        // read) together before the steps run.
-        let lit: Vec<(StepTime, SkySpec)> = days
-            .iter()
-            .flatten()
-            .filter(|s| matches!(classify(scene, s), Kind::Day { .. }))
-            .map(|s| (step_time(scene, s), perez(s.record)))
-            .collect();
         engine.prepare(&lit)?;
     }
+    // LEED's light paths, evaluated beside the steps (an unsharded run: shards skip LEED).
+    let variants = if opts.leed && n == 1 && !opts.series_only {
+        super::light_paths::variants(scene)
+    } else {
+        Vec::new()
+    };
     report.coefficients = engine.coefficient_stats();
     report.operator_from_cache = engine.operator_from_cache();
     if engine.interreflection() == "none" {
@@ -341,32 +356,79 @@ pub fn run_annual(
 
     report.interreflection = engine.interreflection().into();
     report.sweeps += engine.response_sweeps();
+    let paths = Paths::new(
+        &variants,
+        out,
+        quality,
+        store,
+        &lit,
+        opts.max_memory.as_ref().map_or(0, |c| c.bytes),
+        control,
+    )?;
+    if paths.is_none() && variants.iter().any(|v| v.scene.is_some()) {
+        // Stopped while the paths were prepared.
+        report.interrupted = true;
+    }
     let ctx = Ctx {
         scene,
         weather,
         engine: &engine,
         stages: Mutex::new(engine.setup_times().clone()),
         values_only: opts.series_only,
+        paths: paths.as_ref(),
     };
+    if let Some(p) = &paths {
+        // The paths' series start at the first step: the resumed days' rows again.
+        for batch in days[..resumed_days].chunks(DAYS_PER_BATCH) {
+            let rows: Vec<Result<Vec<Option<PathValues>>>> = batch
+                .par_iter()
+                .map(|day| day.par_iter().map(|s| ctx.path_step(s)).collect())
+                .collect();
+            for (day, r) in batch.iter().zip(rows) {
+                for (s, v) in day.iter().zip(r?) {
+                    p.append(s.time, v.as_ref())?;
+                }
+            }
+        }
+    }
     let mut done = report.resumed;
     progress(done, total_steps);
     let mut errs: Vec<f32> = Vec::new();
     let todo = &days[resumed_days..];
     for batch in todo.chunks(DAYS_PER_BATCH) {
-        if stop.load(Ordering::SeqCst) {
+        if report.interrupted || stop.load(Ordering::SeqCst) {
             report.interrupted = true;
             break;
         }
         let results: Vec<Result<Vec<StepOut>>> = engine.peaks().measure("steps", || {
             batch.par_iter().map(|day| ctx.run_day(day)).collect()
         });
-        for (day, res) in batch.iter().zip(results) {
-            let outs = res?;
+        let results: Vec<Vec<StepOut>> = results.into_iter().collect::<Result<_>>()?;
+        // Batched light paths: every lit step's cut of the batch at once.
+        let mut path_rows = match &paths {
+            Some(p) if p.batched() => {
+                let cuts: Vec<&[Source]> = results
+                    .iter()
+                    .flatten()
+                    .filter_map(|o| o.path_cut.as_deref())
+                    .collect();
+                p.values_of_cuts(&cuts).into_iter()
+            }
+            _ => Vec::new().into_iter(),
+        };
+        for (day, outs) in batch.iter().zip(results) {
             for (s, o) in day.iter().zip(&outs) {
                 w_total.append(s.time, &o.total)?;
                 w_sun.append(s.time, &o.sun)?;
                 if let Some(w) = &mut w_surf {
                     w.append(s.time, &o.surfaces)?;
+                }
+                if let Some(p) = &paths {
+                    let row = match o.path_cut {
+                        Some(_) => path_rows.next(),
+                        None => None,
+                    };
+                    p.append(s.time, row.as_ref().or(o.paths.as_ref()))?;
                 }
                 report.sweeps += o.sweeps as u64;
                 errs.extend_from_slice(&o.rel_err);
@@ -386,7 +448,7 @@ pub fn run_annual(
     }
     // Step counts (the plan, so resumed runs report the same).
     for s in days.iter().flatten() {
-        match classify(scene, s) {
+        match classify(scene, s.record) {
             Kind::Missing => report.missing += 1,
             Kind::Night => report.night += 1,
             Kind::Day { sun } => report.sun_steps += usize::from(sun),
@@ -419,6 +481,9 @@ pub fn run_annual(
         if let Some(w) = w_surf.take() {
             w.finish()?;
         }
+        if let Some(p) = paths {
+            p.finish()?;
+        }
         let mut compliance: Option<super::compliance::Compliance> = None;
         if n == 1 && !opts.series_only {
             let tm = Instant::now();
@@ -439,15 +504,12 @@ pub fn run_annual(
                 let run = super::compliance::Run {
                     scene,
                     weather,
-                    quality,
-                    store,
                     out,
                     opts,
-                    control,
                     plan: days.iter().flatten().map(|s| s.record).collect(),
+                    paths: &variants,
                 };
                 let c = super::compliance::compliance(&run)?;
-                report.interrupted |= c.report.interrupted;
                 report.compliance = Some(c.report.clone());
                 compliance = Some(c);
             }
@@ -513,7 +575,7 @@ pub fn run_annual(
 }
 
 /// What a step needs.
-enum Kind {
+pub(super) enum Kind {
     Missing,
     Night,
     Day { sun: bool },
@@ -525,23 +587,25 @@ pub(super) fn is_night(r: &WeatherRecord, sun_altitude_deg: f64) -> bool {
     r.dhi <= 0.0 && (r.dni <= 0.0 || sun_altitude_deg <= 0.0)
 }
 
-fn classify(scene: &Scene, s: &Planned) -> Kind {
-    if s.record.missing {
+/// What the weather record `r` asks of a step of `scene`.
+pub(super) fn classify(scene: &Scene, r: &WeatherRecord) -> Kind {
+    if r.missing {
         return Kind::Missing;
     }
-    let sun = solar_position(s.record.utc(&scene.site), &scene.site);
-    if is_night(s.record, sun.altitude_deg()) {
+    let sun = solar_position(r.utc(&scene.site), &scene.site);
+    if is_night(r, sun.altitude_deg()) {
         return Kind::Night;
     }
     Kind::Day {
-        sun: sun.altitude_deg() > 0.0 && s.record.dni > 0.0,
+        sun: sun.altitude_deg() > 0.0 && r.dni > 0.0,
     }
 }
 
-fn step_time(scene: &Scene, s: &Planned) -> StepTime {
+/// When the step of weather record `r` is, at `scene`'s site.
+pub(super) fn step_time(scene: &Scene, r: &WeatherRecord) -> StepTime {
     StepTime {
-        utc: s.record.utc(&scene.site),
-        local: s.time,
+        utc: r.utc(&scene.site),
+        local: r.time,
     }
 }
 
@@ -561,6 +625,8 @@ struct Ctx<'a> {
     stages: Mutex<StageTimes>,
     /// No error estimate ([`EngineOptions::values_only`]): no relative errors to collect.
     values_only: bool,
+    /// LEED's light paths, evaluated on each lit step's sky and cut.
+    paths: Option<&'a Paths<'a>>,
 }
 
 impl Ctx<'_> {
@@ -579,7 +645,7 @@ impl Ctx<'_> {
 
     fn run_step(&self, s: &Planned, state: &mut Option<TransportState>) -> Result<StepOut> {
         let n = self.scene.sensors.len();
-        if !matches!(classify(self.scene, s), Kind::Day { .. }) {
+        if !matches!(classify(self.scene, s.record), Kind::Day { .. }) {
             return Ok(StepOut {
                 total: vec![0.0; n],
                 sun: vec![0.0; n],
@@ -588,19 +654,40 @@ impl Ctx<'_> {
             });
         }
         let r = s.record;
-        let at = step_time(self.scene, s);
+        let at = step_time(self.scene, s.record);
         let spec = perez(r);
-        let step = self
-            .engine
-            .step(&at, &spec, state.as_ref(), false)
-            .map_err(|e| {
-                Error::input(
-                    &self.weather.path,
-                    Some(r.line),
-                    Some(&format!("DNI {} DHI {}", r.dni, r.dhi)),
-                    format!("cannot build the Perez sky: {e}"),
-                )
-            })?;
+        let (sky, mut report) = self.sky(s, &at, &spec)?;
+        let (mut paths, mut path_cut) = (None, None);
+        let step = match self.paths {
+            None => self
+                .engine
+                .step_sky(&sky, state.as_ref(), false, report, spec.irradiance()),
+            Some(p) => {
+                // One cut of the sky for the run and every light path.
+                let q = self.engine.directions().quality();
+                let cut = report
+                    .stage_seconds
+                    .time("sources", || sources_for(&sky, q));
+                let batched = p.batched();
+                if batched {
+                    p.forget_sky(&at, &spec);
+                } else {
+                    paths = Some(p.values(&at, &spec, &sky, &cut));
+                }
+                let step = self.engine.step_sources(
+                    &sky,
+                    &cut,
+                    state.as_ref(),
+                    false,
+                    report,
+                    spec.irradiance(),
+                );
+                if batched {
+                    path_cut = Some(cut.sources);
+                }
+                step
+            }
+        };
         self.stages
             .lock()
             .expect("stages lock")
@@ -621,6 +708,37 @@ impl Ctx<'_> {
                     .collect()
             },
             sweeps: step.report.transport_solve.map_or(0, |t| t.sweeps),
+            paths,
+            path_cut,
         })
+    }
+
+    /// The step's sky and begun report ([`Engine::sky`]), its error naming the record.
+    fn sky(&self, s: &Planned, at: &StepTime, spec: &SkySpec) -> Result<(Sky, Report)> {
+        let r = s.record;
+        self.engine.sky(at, spec).map_err(|e| {
+            Error::input(
+                &self.weather.path,
+                Some(r.line),
+                Some(&format!("DNI {} DHI {}", r.dni, r.dhi)),
+                format!("cannot build the Perez sky: {e}"),
+            )
+        })
+    }
+
+    /// Only the light paths' values of a step (`None` without daylight): the rows of
+    /// resumed days, whose run values are already written.
+    fn path_step(&self, s: &Planned) -> Result<Option<PathValues>> {
+        let Some(p) = self.paths else {
+            return Ok(None);
+        };
+        if !matches!(classify(self.scene, s.record), Kind::Day { .. }) {
+            return Ok(None);
+        }
+        let at = step_time(self.scene, s.record);
+        let spec = perez(s.record);
+        let (sky, _) = self.sky(s, &at, &spec)?;
+        let cut = sources_for(&sky, self.engine.directions().quality());
+        Ok(Some(p.values(&at, &spec, &sky, &cut)))
     }
 }

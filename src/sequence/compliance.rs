@@ -3,8 +3,9 @@
 //! sensor values ([`crate::metrics::leed`], [`crate::metrics::en17037`]).
 //!
 //! * **Light paths.** With aperture groups, each group's light and the static apertures'
-//!   light are runs of their own scene variants ([`super::light_paths`]), written under
-//!   `paths/<name>/` with their own checkpoints; the shaded state of a group is its open
+//!   light are their own scene variants ([`super::light_paths`]), evaluated beside the
+//!   run's steps on the same skies and cuts ([`super::path_pass`]) and written under
+//!   `paths/<name>/`; the shaded state of a group is its open
 //!   light × the shade's transmittance (honeybee's default). Without groups, the run's own
 //!   values are the one static path: no further run.
 //! * **Steps.** The arrays hold the sun-up steps (sun above the horizon, record not
@@ -13,10 +14,8 @@
 //!   of the weather file, ranked by its diffuse horizontal illuminance (DHI irradiance where
 //!   the file has no illuminance); it needs a whole hourly year.
 
-use super::annual::{run_annual, AnnualOptions, RunControl};
-use super::config::Quality;
-use super::light_paths::{path_scene, triangle_groups, STATIC_PATH};
-use crate::cache::Store;
+use super::annual::AnnualOptions;
+use super::light_paths::{PathVariant, STATIC_PATH};
 use crate::error::{Error, Result};
 use crate::export;
 use crate::metrics::en17037::{self, En17037Grid, En17037Result};
@@ -25,6 +24,7 @@ use crate::scene::Scene;
 use crate::site::solar_position::solar_position;
 use crate::weather::{Weather, WeatherRecord};
 use chrono::{NaiveDateTime, Timelike};
+use rayon::prelude::*;
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
@@ -44,12 +44,11 @@ pub struct ComplianceReport {
     pub sun_up_steps: usize,
     /// Bytes of the hourly arrays held at once (grows linearly with the paths).
     pub array_bytes: u64,
-    /// Wall time of the path runs, s.
+    /// Wall time of reading the light paths' series back, s (they are evaluated beside
+    /// the run's steps, in its `steps` time).
     pub path_seconds: f64,
     /// Wall time of the metrics, s.
     pub metric_seconds: f64,
-    /// Whether a path run was interrupted (rerun to continue).
-    pub interrupted: bool,
 }
 
 /// The results, for the report page.
@@ -99,15 +98,6 @@ fn grids_of(scene: &Scene) -> Vec<Grid> {
             }
         })
         .collect()
-}
-
-/// Folder name of a path: its identifier when that is a safe file name, else `group<k>`.
-fn folder(name: &str, k: usize) -> String {
-    if export::grids::is_safe_identifier(name) {
-        name.to_string()
-    } else {
-        format!("group{k}")
-    }
 }
 
 /// A path's hourly values over the sun-up steps, per grid, hour-major f32.
@@ -170,11 +160,10 @@ fn read_path(dir: &Path, grids: &[Grid], sun_up: &[usize], steps: usize) -> Resu
 pub(super) struct Run<'a> {
     pub scene: &'a Scene,
     pub weather: &'a Weather,
-    pub quality: &'a Quality,
-    pub store: &'a Store,
     pub out: &'a Path,
     pub opts: &'a AnnualOptions,
-    pub control: &'a RunControl<'a>,
+    /// The light paths ([`super::light_paths::variants`]), their series already written.
+    pub paths: &'a [PathVariant],
     /// The run's steps, in order.
     pub plan: Vec<&'a WeatherRecord>,
 }
@@ -218,60 +207,31 @@ pub(super) fn compliance(run: &Run) -> Result<Compliance> {
             grids: own(&mut run_values, out, &grids, &sun_up, steps)?.clone(),
         });
     } else {
-        let of = triangle_groups(scene);
-        let sub = AnnualOptions {
-            leed: false,
-            en17037: false,
-            ill: false,
-            surfaces: false,
-            series_only: true,
-            ..opts.clone()
-        };
-        let n = groups.len() + 1;
-        for k in 0..n {
-            let (name, keep, shade) = if k == 0 {
-                (STATIC_PATH.to_string(), None, None)
-            } else {
-                let g = &groups[k - 1];
-                let t = g
-                    .shade_transmittance
-                    .unwrap_or(leed::DEFAULT_SHADE_TRANSMITTANCE);
-                (g.identifier.clone(), Some(k as u32 - 1), Some(t))
+        // Each path's series was written beside the run's steps (paths/<folder>/); read
+        // back in parallel, the values as written, so LEED sees what the files say.
+        let mut read: Vec<Option<GridArrays>> = run
+            .paths
+            .par_iter()
+            .map(|v| {
+                v.scene
+                    .as_ref()
+                    .map(|_| read_path(&out.join("paths").join(&v.folder), &grids, &sun_up, steps))
+                    .transpose()
+            })
+            .collect::<Result<_>>()?;
+        for (v, r) in run.paths.iter().zip(&mut read) {
+            let grids = match r.take() {
+                Some(g) => g,
+                None => {
+                    // The scene itself: the run's own values.
+                    c.report.paths_from_run.push(v.name.clone());
+                    own(&mut run_values, out, &grids, &sun_up, steps)?.clone()
+                }
             };
-            let Some(variant) = path_scene(scene, &of, keep) else {
-                // The scene itself: the run's own values.
-                c.report.paths_from_run.push(name.clone());
-                paths.push(PathArrays {
-                    name,
-                    shade,
-                    grids: own(&mut run_values, out, &grids, &sun_up, steps)?.clone(),
-                });
-                continue;
-            };
-            let dir = out.join("paths").join(folder(&name, k));
-            let progress =
-                |d: usize, t: usize| (run.control.progress)(t * (k + 1) + d, t * (n + 1));
-            let control = RunControl {
-                stop: run.control.stop,
-                progress: &progress,
-            };
-            let r = run_annual(
-                &variant,
-                run.weather,
-                run.quality,
-                run.store,
-                &dir,
-                &sub,
-                &control,
-            )?;
-            if r.interrupted {
-                c.report.interrupted = true;
-                return Ok(c);
-            }
             paths.push(PathArrays {
-                name,
-                shade,
-                grids: read_path(&dir, &grids, &sun_up, steps)?,
+                name: v.name.clone(),
+                shade: v.shade,
+                grids,
             });
         }
     }

@@ -1,12 +1,14 @@
 //! Light paths of operable aperture groups, as honeybee-radiance simulates them for LEED's
 //! blinds: one path per aperture group, in which all other glazing (every other group's
 //! and the static glazing) is black and opaque, and one for the static apertures (glazing
-//! in no group), in which every group's glazing is black. Each path is an ordinary run of
-//! its own scene variant, so it has its own cache records, checkpoints and resume. Each
-//! piece of glazing is open in exactly one path, so the sum of the paths is the scene with
+//! in no group), in which every group's glazing is black. Each path is its own scene
+//! variant with its own cache records, evaluated over the run's steps beside the run
+//! ([`super::path_pass`]). Each piece of glazing is open in exactly one path, so the sum of the paths is the scene with
 //! every group open, less the light that crosses the glazing of two different paths
 //! (honeybee's simplification too: docs/metrics.md).
 
+use crate::export::grids::is_safe_identifier;
+use crate::metrics::leed::DEFAULT_SHADE_TRANSMITTANCE;
 use crate::photometry::Rgb;
 use crate::scene::{Material, Scene};
 
@@ -70,4 +72,49 @@ pub fn path_scene(scene: &Scene, of: &[Option<u32>], keep: Option<u32>) -> Optio
         }
     }
     Some(s)
+}
+
+/// One light path of a run with aperture groups.
+pub struct PathVariant {
+    /// The path's name: [`STATIC_PATH`] or the group's identifier.
+    pub name: String,
+    /// The group's shade transmittance (`None` for the static path).
+    pub shade: Option<f64>,
+    /// The path's scene; `None` when it is the scene itself (its values are the run's).
+    pub scene: Option<Scene>,
+    /// Its folder under the run's `paths/`: the name when that is a safe file name, else
+    /// `group<k>`.
+    pub folder: String,
+}
+
+/// The light paths of `scene`, static first, then one per aperture group in order; empty
+/// without aperture groups.
+pub fn variants(scene: &Scene) -> Vec<PathVariant> {
+    let groups = &scene.imported.aperture_groups;
+    if groups.is_empty() {
+        return Vec::new();
+    }
+    let of = triangle_groups(scene);
+    (0..=groups.len())
+        .map(|k| {
+            let (name, keep, shade) = if k == 0 {
+                (STATIC_PATH.to_string(), None, None)
+            } else {
+                let g = &groups[k - 1];
+                let t = g.shade_transmittance.unwrap_or(DEFAULT_SHADE_TRANSMITTANCE);
+                (g.identifier.clone(), Some(k as u32 - 1), Some(t))
+            };
+            let folder = if is_safe_identifier(&name) {
+                name.clone()
+            } else {
+                format!("group{k}")
+            };
+            PathVariant {
+                scene: path_scene(scene, &of, keep),
+                name,
+                shade,
+                folder,
+            }
+        })
+        .collect()
 }

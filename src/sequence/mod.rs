@@ -26,6 +26,7 @@ pub mod convergence;
 pub mod annual;
 pub mod merge;
 pub mod light_paths;
+mod path_pass;
 pub mod compliance;
 pub mod surfaces;
 pub mod render;

@@ -16,13 +16,13 @@
 //! What a run reuses across its steps (directions, the operator, per-direction mesh
 //! weights) lives in the [`Engine`]; what one step produces is a [`Step`].
 
-use super::coefficients::Coefficients;
+use super::coefficients::{Coefficients, CutBatch};
 use super::config::{Quality, SkySpec};
 use super::direct::{mesh_irradiance, sensors_from_responses, MeshMemo, MeshWeights};
 use super::directions::{DirectionData, Directions};
 use super::estimate::{SensorValue, ERROR_MODEL};
 use super::report::{Report, StageTimes, SunReport};
-use super::sky::{build_sky, sources_for};
+use super::sky::{build_sky, sources_for, SkySources};
 use super::surfaces::SurfaceMap;
 use crate::cache::Store;
 use crate::error::Result;
@@ -208,6 +208,7 @@ impl<'a> Engine<'a> {
                 load,
                 steps,
                 self.opts.max_memory_bytes,
+                self.opts.values_only,
             )
         })?;
         // The steps sum coefficients and never read the operator again: it is the run's
@@ -328,18 +329,23 @@ impl<'a> Engine<'a> {
         previous: Option<&TransportState>,
         detail: bool,
     ) -> Result<Step> {
+        let (sky, report) = self.sky(at, spec)?;
+        let mut step = self.step_sky(&sky, previous, detail, report, spec.irradiance());
+        step.sky = Some(sky);
+        Ok(step)
+    }
+
+    /// Stage 1 of [`Self::step`]: the sun's position and the step's sky (the one
+    /// [`Self::prepare`] built, else built now), with the step's report begun.
+    ///
+    /// # Errors
+    /// Bad sky parameters ([`crate::Error::Input`]).
+    pub fn sky(&self, at: &StepTime, spec: &SkySpec) -> Result<(Sky, Report)> {
         let mut times = StageTimes::default();
         let sun = times.time("solar_position", || {
             solar_position(at.utc, &self.scene.site)
         });
-        let prepared = (sky_key(at, spec).0 != i64::MIN)
-            .then(|| {
-                self.skies
-                    .lock()
-                    .expect("sky memo")
-                    .remove(&sky_key(at, spec))
-            })
-            .flatten();
+        let prepared = self.take_sky(at, spec);
         let sky = times.time("sky", || {
             if let Some(s) = prepared {
                 return Ok(s);
@@ -367,9 +373,34 @@ impl<'a> Engine<'a> {
                 sun.altitude_deg()
             ));
         }
-        let mut step = self.step_sky(&sky, previous, detail, report, spec.irradiance());
-        step.sky = Some(sky);
-        Ok(step)
+        Ok((sky, report))
+    }
+
+    /// The sensor values of the steps of `batch` from daylight coefficients prepared with
+    /// [`EngineOptions::values_only`], node by node
+    /// ([`Coefficients::evaluate_values_batch`]); `None` when the steps do not use
+    /// coefficients (use [`Self::step_sources`]). The same bits as one step at a time.
+    pub(super) fn values_batch(&self, batch: &CutBatch) -> Option<Vec<Vec<SensorValue>>> {
+        let (c, sun_dirs) = self.coefficients.as_ref()?;
+        if !self.opts.values_only {
+            return None;
+        }
+        let sun: Vec<Vec<f64>> = batch
+            .suns
+            .iter()
+            .map(|s| self.sun_lux(sun_dirs, s.as_slice()))
+            .collect();
+        Some(c.evaluate_values_batch(batch, &sun))
+    }
+
+    /// The sky [`Self::prepare`] built for the step at `at` under `spec`, handed over once
+    /// (`None`: not built there, or already taken).
+    pub fn take_sky(&self, at: &StepTime, spec: &SkySpec) -> Option<Sky> {
+        let key = sky_key(at, spec);
+        if key.0 == i64::MIN {
+            return None;
+        }
+        self.skies.lock().expect("sky memo").remove(&key)
     }
 
     /// [`Self::step`] for a sky already built (stages 2–7). `report` carries what the
@@ -383,22 +414,39 @@ impl<'a> Engine<'a> {
         mut report: Report,
         dni_dhi: Option<(f64, f64)>,
     ) -> Step {
-        let mut times = std::mem::take(&mut report.stage_seconds);
         // 2. Sources.
-        let s = times.time("sources", || sources_for(sky, self.dirs.quality()));
-        self.note_sources(&s, &mut report);
-        let sources = s.sources;
+        let s = report
+            .stage_seconds
+            .time("sources", || sources_for(sky, self.dirs.quality()));
+        self.step_sources(sky, &s, previous, detail, report, dni_dhi)
+    }
+
+    /// [`Self::step_sky`] for sources already cut from `sky` at this engine's quality
+    /// (stages 3–7): runs that share a sky, such as the light paths of `annual --leed`,
+    /// cut it once.
+    pub fn step_sources(
+        &self,
+        sky: &Sky,
+        s: &SkySources,
+        previous: Option<&TransportState>,
+        detail: bool,
+        mut report: Report,
+        dni_dhi: Option<(f64, f64)>,
+    ) -> Step {
+        let mut times = std::mem::take(&mut report.stage_seconds);
+        self.note_sources(s, &mut report);
+        let sources = s.sources.clone();
         if let (Some((c, sun_dirs)), false) = (&self.coefficients, detail) {
             // 3–7 by daylight coefficients: sums over the cut, no projection, no solve.
             let (sensors, interp) = times.time("coefficients", || {
                 let sun_fine = self.sun_lux(sun_dirs, &sources);
-                let (coarse, sun_coarse) = if self.opts.values_only {
-                    (Vec::new(), sun_fine.clone())
-                } else {
-                    let coarse = sources_for(sky, self.coarse.quality()).sources;
-                    let sun_coarse = self.sun_lux(&self.coarse, &coarse);
-                    (coarse, sun_coarse)
-                };
+                if self.opts.values_only {
+                    let batch = CutBatch::new(&[&sources]);
+                    let mut v = c.evaluate_values_batch(&batch, &[sun_fine]);
+                    return (v.pop().expect("one step"), Vec::new());
+                }
+                let coarse = sources_for(sky, self.coarse.quality()).sources;
+                let sun_coarse = self.sun_lux(&self.coarse, &coarse);
                 c.evaluate(
                     &sources,
                     &coarse,

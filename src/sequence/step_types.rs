@@ -29,8 +29,9 @@ pub struct EngineOptions {
     /// built even without sensors, and steps solve forward.
     pub mesh_solution: bool,
     /// Only the values, no error estimate: daylight-coefficient steps skip the coarser
-    /// level (its sources, sun and sky responses), so `lux_err` is not stated. The light
-    /// paths of `annual --leed`, whose run states the error.
+    /// level (its sources, sun and sky responses) and every sum that feeds only the error,
+    /// and keep only the coefficients the values need, so `lux_err` is not stated (0). The
+    /// light paths of `annual --leed`, whose run states the error.
     pub values_only: bool,
 }
 
