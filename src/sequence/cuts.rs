@@ -13,7 +13,7 @@ use super::step::StepTime;
 use crate::cache::{self, RecordKey, SceneHash, Section, Store, FIRST_USER_TAG};
 use crate::scene::Scene;
 use crate::site::solar_position::solar_position;
-use crate::sky::Sky;
+use crate::sky::{perez, Sky};
 use crate::sources::{node_source, SkyNodeKey, Source, SourceKey, SunGrid, SunKey};
 use chrono::{Datelike, Timelike};
 use rayon::prelude::*;
@@ -21,10 +21,14 @@ use std::collections::BTreeMap;
 
 /// Version of the cuts a record lists, hashed into its key: bumped whenever the sky
 /// models, the subdivision or the sun grid change what a step's cut is.
-pub const CUTS_VERSION: u32 = 1;
+pub const CUTS_VERSION: u32 = 2;
 
 /// Section tag: three u64 per node ([`encode_key`]).
 const TAG_NODES: u32 = FIRST_USER_TAG;
+/// Section tag: the Perez skies' horizontal integrals the union's skies needed
+/// ([`perez::remembered_integrals`]), so a warm run does not integrate each step's sky
+/// again (8 192 evaluations of the distribution per step, a fifth of a warm office year).
+const TAG_INTEGRALS: u32 = FIRST_USER_TAG + 1;
 
 /// A cached union is checked against the cuts of every (steps / [`CHECK_MIN`])th step, at
 /// least every `CHECK_EVERY`th (and the last): every step of a run under 64 steps.
@@ -82,7 +86,8 @@ pub(super) fn union(
         spacing_deg: quality.sun_grid_deg,
     };
     let key = record_key(scene, quality, steps);
-    if let Some(nodes) = store.get(&key).and_then(|r| decode(&r, &grid)) {
+    let record = store.get(&key);
+    if let Some((r, nodes)) = record.and_then(|r| decode(&r, &grid).map(|n| (r, n))) {
         let every = (steps.len() / CHECK_MIN).clamp(1, CHECK_EVERY);
         let sampled: Vec<usize> = (0..steps.len())
             .step_by(every)
@@ -94,6 +99,9 @@ pub(super) fn union(
                 .is_none_or(|(_, cut)| cut_nodes(&grid, cut).all(|s| nodes.contains_key(&s.key)))
         });
         if holds {
+            if let Ok(e) = r.section::<perez::RememberedIntegral>(TAG_INTEGRALS) {
+                perez::remember_integrals(e);
+            }
             return Union {
                 nodes,
                 skies: (0..steps.len()).map(|_| None).collect(),
@@ -136,7 +144,18 @@ pub(super) fn union(
     }
     if store.is_enabled() {
         let flat: Vec<[u64; 3]> = nodes.keys().map(encode_key).collect();
-        store.put(&key, &cache::encode(&key, &[Section::of(TAG_NODES, &flat)]));
+        // Every integral the process holds: this run's skies' (any other is as true).
+        let integrals = perez::remembered_integrals();
+        store.put(
+            &key,
+            &cache::encode(
+                &key,
+                &[
+                    Section::of(TAG_NODES, &flat),
+                    Section::of(TAG_INTEGRALS, &integrals),
+                ],
+            ),
+        );
     }
     Union {
         nodes,

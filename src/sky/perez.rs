@@ -263,16 +263,21 @@ impl PerezParameters {
 /// Skies whose horizontal integral a process keeps, at most: about 64 bytes each.
 const REMEMBERED: usize = 1 << 16;
 
+/// The process's remembered horizontal integrals, by the bits of the parameters and the
+/// sun direction.
+fn integral_memo() -> &'static std::sync::Mutex<std::collections::HashMap<[u64; 8], f64>> {
+    static MEMO: std::sync::OnceLock<std::sync::Mutex<std::collections::HashMap<[u64; 8], f64>>> =
+        std::sync::OnceLock::new();
+    MEMO.get_or_init(Default::default)
+}
+
 /// [`PerezParameters::horizontal_integral`], remembered for the process: a LEED run builds
 /// each step's sky once per light path, and this integral (128 × 128 evaluations of the
 /// distribution) was a fifth of a warm path run. The value is the same bits either way;
 /// the memo forgets everything when it holds [`REMEMBERED`] skies.
 fn remembered_horizontal_integral(p: &PerezParameters, sun_dir: DVec3) -> f64 {
-    use std::collections::HashMap;
-    use std::sync::{Mutex, OnceLock};
-    static MEMO: OnceLock<Mutex<HashMap<[u64; 8], f64>>> = OnceLock::new();
     let key = [p.a, p.b, p.c, p.d, p.e, sun_dir.x, sun_dir.y, sun_dir.z].map(f64::to_bits);
-    let memo = MEMO.get_or_init(|| Mutex::new(HashMap::new()));
+    let memo = integral_memo();
     if let Some(&v) = memo.lock().expect("memo").get(&key) {
         return v;
     }
@@ -283,6 +288,46 @@ fn remembered_horizontal_integral(p: &PerezParameters, sun_dir: DVec3) -> f64 {
     }
     m.insert(key, v);
     v
+}
+
+/// One remembered horizontal integral: the bits of the parameters a…e and the sun
+/// direction's x, y, z, then the integral's bits.
+pub type RememberedIntegral = [u64; 9];
+
+/// Every horizontal integral this process remembers, sorted: what a cache record keeps so
+/// that a warm run need not integrate its skies again ([`remember_integrals`]).
+pub fn remembered_integrals() -> Vec<RememberedIntegral> {
+    let memo = integral_memo().lock().expect("memo");
+    let mut v: Vec<RememberedIntegral> = memo
+        .iter()
+        .map(|(k, v)| {
+            let mut e = [0u64; 9];
+            e[..8].copy_from_slice(k);
+            e[8] = v.to_bits();
+            e
+        })
+        .collect();
+    v.sort_unstable();
+    v
+}
+
+/// Remembers integrals [`remembered_integrals`] listed (from a checksummed record of the
+/// same crate version: each is the value [`PerezParameters::horizontal_integral`] gives
+/// its key). Entries whose value is not finite and positive are ignored.
+pub fn remember_integrals(entries: &[RememberedIntegral]) {
+    let mut m = integral_memo().lock().expect("memo");
+    for e in entries {
+        let v = f64::from_bits(e[8]);
+        if !(v.is_finite() && v > 0.0) {
+            continue;
+        }
+        if m.len() >= REMEMBERED {
+            m.clear();
+        }
+        let mut k = [0u64; 8];
+        k.copy_from_slice(&e[..8]);
+        m.insert(k, v);
+    }
 }
 
 /// The normalised Perez distribution.

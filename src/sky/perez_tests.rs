@@ -185,6 +185,44 @@ fn per_ring_integral_matches_a_fine_quadrature() {
 }
 
 #[test]
+fn remembered_integrals_leave_in_a_list_and_come_back_from_one() {
+    // Parameters no other test uses: the memo is the process's.
+    let d = direction_from_alt_az(23.456, 123.0);
+    let p = parameters(432.1, 98.7, d.z.acos(), 123, 7.0);
+    let v = remembered_horizontal_integral(&p, d);
+    let key = [p.a, p.b, p.c, p.d, p.e, d.x, d.y, d.z].map(f64::to_bits);
+    let listed = remembered_integrals();
+    let entry = listed
+        .iter()
+        .find(|e| e[..8] == key)
+        .expect("the integral is listed");
+    assert_eq!(entry[8], v.to_bits());
+    assert!(listed.windows(2).all(|w| w[0] < w[1]), "sorted");
+    // A list brings its entries back, as they are: a value only a list could give
+    // (twice the integral) is what is remembered for a new key. A value that is not
+    // finite and positive is not.
+    let q = PerezParameters {
+        e: p.e + 0.125,
+        ..p
+    };
+    let qkey = [q.a, q.b, q.c, q.d, q.e, d.x, d.y, d.z].map(f64::to_bits);
+    let mut bad = [0u64; 9];
+    bad[..8].copy_from_slice(&qkey);
+    bad[8] = f64::NAN.to_bits();
+    remember_integrals(&[bad]);
+    assert_eq!(
+        remembered_horizontal_integral(&q, d).to_bits(),
+        q.horizontal_integral(d).to_bits()
+    );
+    let r = PerezParameters { e: p.e + 0.25, ..p };
+    let mut e = [0u64; 9];
+    e[..8].copy_from_slice(&[r.a, r.b, r.c, r.d, r.e, d.x, d.y, d.z].map(f64::to_bits));
+    e[8] = (2.0 * r.horizontal_integral(d)).to_bits();
+    remember_integrals(&[e]);
+    assert_eq!(remembered_horizontal_integral(&r, d).to_bits(), e[8]);
+}
+
+#[test]
 fn the_remembered_horizontal_integral_is_the_integral() {
     let d = direction_from_alt_az(35.0, 200.0);
     let p = parameters(650.0, 110.0, d.z.acos(), 80, 4.0);
