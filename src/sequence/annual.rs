@@ -69,12 +69,10 @@ pub struct AnnualOptions {
     /// Also write `surfaces.csv` (per group: incident irradiance, transmitted solar power).
     pub surfaces: bool,
     /// LEED v4.1 Daylight Option 1 with operable blinds: `leed.json`, `leed_blinds.csv`,
-    /// `leed_sensors.csv` (runs each aperture group's light path under `paths/`).
+    /// `leed_sensors.csv` (each aperture group's light path written under `paths/`).
     pub leed: bool,
     /// EN 17037 daylight provision: `en17037.json` (a whole hourly year).
     pub en17037: bool,
-    /// Write only the time series and `report.json` (no metrics): the light-path runs.
-    pub series_only: bool,
 }
 
 impl Default for AnnualOptions {
@@ -90,7 +88,6 @@ impl Default for AnnualOptions {
             surfaces: false,
             leed: false,
             en17037: false,
-            series_only: false,
         }
     }
 }
@@ -265,7 +262,7 @@ pub fn run_annual(
             max_memory_bytes: opts.max_memory.as_ref().map_or(0, |c| c.bytes),
             defer_operator: opts.daylight_coefficients,
             mesh_solution: false,
-            values_only: opts.series_only,
+            values_only: false,
         },
     );
     // Every lit step's sky, so the coefficients of all its sources are computed (or read)
@@ -280,7 +277,7 @@ pub fn run_annual(
         engine.prepare(&lit)?;
     }
     // LEED's light paths, evaluated beside the steps (an unsharded run: shards skip LEED).
-    let variants = if opts.leed && n == 1 && !opts.series_only {
+    let variants = if opts.leed && n == 1 {
         super::light_paths::variants(scene)
     } else {
         Vec::new()
@@ -374,7 +371,6 @@ pub fn run_annual(
         weather,
         engine: &engine,
         stages: Mutex::new(engine.setup_times().clone()),
-        values_only: opts.series_only,
         paths: paths.as_ref(),
     };
     if let Some(p) = &paths {
@@ -485,7 +481,7 @@ pub fn run_annual(
             p.finish()?;
         }
         let mut compliance: Option<super::compliance::Compliance> = None;
-        if n == 1 && !opts.series_only {
+        if n == 1 {
             let tm = Instant::now();
             let per = write_metrics(out, weather.interval_minutes, &opts.metrics)?;
             if opts.ill {
@@ -529,12 +525,6 @@ pub fn run_annual(
                     },
                 )?;
             }
-        } else if opts.series_only {
-            report.skipped.push(
-                "metrics and the error estimate: a light path of --leed (the main run has \
-                 them)"
-                    .into(),
-            );
         } else {
             report
                 .skipped
@@ -623,8 +613,6 @@ struct Ctx<'a> {
     weather: &'a Weather,
     engine: &'a Engine<'a>,
     stages: Mutex<StageTimes>,
-    /// No error estimate ([`EngineOptions::values_only`]): no relative errors to collect.
-    values_only: bool,
     /// LEED's light paths, evaluated on each lit step's sky and cut.
     paths: Option<&'a Paths<'a>>,
 }
@@ -699,14 +687,11 @@ impl Ctx<'_> {
             total: step.sensors.iter().map(|v| v.lux).collect(),
             sun: step.sensors.iter().map(|v| v.lux_sun).collect(),
             surfaces: step.surfaces,
-            rel_err: if self.values_only {
-                Vec::new()
-            } else {
-                step.sensors
-                    .iter()
-                    .filter_map(|v| v.relative_error(10.0).map(|e| e as f32))
-                    .collect()
-            },
+            rel_err: step
+                .sensors
+                .iter()
+                .filter_map(|v| v.relative_error(10.0).map(|e| e as f32))
+                .collect(),
             sweeps: step.report.transport_solve.map_or(0, |t| t.sweeps),
             paths,
             path_cut,
