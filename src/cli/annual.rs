@@ -80,7 +80,6 @@ pub fn run(a: AnnualArgs, cap: &MemoryCap) -> Result<()> {
         en17037: a.en17037,
         daylight_coefficients: !a.forward,
         max_memory: Some(cap.clone()),
-        ..AnnualOptions::default()
     };
     opts.metrics.validate()?;
     super::check_outputs(&a.out, a.gltf.as_deref())?;
