@@ -4,7 +4,7 @@
 //!
 //! * **Light paths.** With aperture groups, each group's light and the static apertures'
 //!   light are their own scene variants ([`super::light_paths`]), evaluated beside the
-//!   run's steps on the same skies and cuts ([`super::path_pass`]) and written under
+//!   run's steps on the same skies and cuts (`sequence::path_pass`) and written under
 //!   `paths/<name>/`; the shaded state of a group is its open
 //!   light × the shade's transmittance (honeybee's default). Without groups, the run's own
 //!   values are the one static path: no further run.
@@ -168,12 +168,13 @@ pub(super) struct Run<'a> {
     pub plan: Vec<&'a WeatherRecord>,
 }
 
-/// Runs the light paths LEED needs and computes what `opts` asks for, writing
-/// `leed.json`, `leed_blinds.csv`, `leed_sensors.csv` and `en17037.json` into `out`.
+/// Reads the light paths' series the run wrote (`run.paths`) and computes what `opts`
+/// asks for, writing `leed.json`, `leed_blinds.csv`, `leed_sensors.csv` and
+/// `en17037.json` into `out`.
 ///
 /// # Errors
-/// EN 17037 on other than a whole hourly year ([`Error::Arg`]); the path runs' errors;
-/// the metrics' input checks.
+/// EN 17037 on other than a whole hourly year ([`Error::Arg`]); a path's series that
+/// cannot be read or has the wrong number of steps; the metrics' input checks.
 pub(super) fn compliance(run: &Run) -> Result<Compliance> {
     let (scene, out, opts) = (run.scene, run.out, run.opts);
     let mut c = Compliance::default();

@@ -3,9 +3,9 @@
 //! and the static glazing) is black and opaque, and one for the static apertures (glazing
 //! in no group), in which every group's glazing is black. Each path is its own scene
 //! variant with its own cache records, evaluated over the run's steps beside the run
-//! ([`super::path_pass`]). Each piece of glazing is open in exactly one path, so the sum of the paths is the scene with
-//! every group open, less the light that crosses the glazing of two different paths
-//! (honeybee's simplification too: docs/metrics.md).
+//! (`sequence::path_pass`). Each piece of glazing is open in exactly one path, so the sum
+//! of the paths is the scene with every group open, less the light that crosses the
+//! glazing of two different paths (honeybee's simplification too: docs/metrics.md).
 
 use crate::export::grids::is_safe_identifier;
 use crate::metrics::leed::DEFAULT_SHADE_TRANSMITTANCE;

@@ -6,11 +6,12 @@
 //! path: on the sample office with four groups, most of those runs' time.
 //!
 //! Each path keeps its own engine, so its coefficients are its own cache records (an
-//! interrupted cold run resumes from them). Only the values are computed, from the
-//! values-only coefficients ([`super::coefficients::Coefficients::evaluate_values`]): the
-//! run itself states the error. A path whose scene emits light takes independent forward
-//! steps (no warm start), which daylight coefficients cannot carry. Each path's series is
-//! written as the run writes its own, row by row in step order, to `paths/<name>/`.
+//! interrupted cold run resumes from them). Only the values are computed, from
+//! values-only coefficients summed node by node for a batch of steps
+//! ([`super::coefficients::Coefficients::evaluate_values_batch`]): the run itself states
+//! the error. A path whose scene emits light takes independent forward steps (no warm
+//! start), which daylight coefficients cannot carry. Each path's series is written as the
+//! run writes its own, row by row in step order, to `paths/<name>/`.
 
 use super::annual::RunControl;
 use super::coefficients::CutBatch;
