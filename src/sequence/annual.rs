@@ -16,11 +16,11 @@
 //!   (sun only, no interreflection: what ASE counts), `metrics.csv`, `summary.json` and
 //!   `report.html` (unsharded runs and merges), `report.json`.
 
+pub(super) use super::annual_steps::{classify, is_night, perez, step_time, Kind};
+use super::annual_steps::{Ctx, Planned, StepOut};
 use super::config::{Quality, SkySpec};
 use super::merge::parse_times;
 use super::path_pass::{PathValues, Paths};
-use super::report::{Report, StageTimes};
-use super::sky::sources_for;
 use super::step::{Engine, EngineOptions, StepTime};
 use crate::cache::Store;
 use crate::error::{Error, Result};
@@ -28,12 +28,9 @@ use crate::export::{self, IlluminanceWriter};
 use crate::metrics::MetricParams;
 // Where callers found them before the tables moved to `merge`.
 pub use super::merge::{merge, write_metrics, write_report_page};
-use crate::radiosity::TransportState;
 use crate::scene::Scene;
-use crate::site::solar_position::solar_position;
-use crate::sky::Sky;
 use crate::sources::Source;
-use crate::weather::{Weather, WeatherRecord};
+use crate::weather::Weather;
 use chrono::{NaiveDate, NaiveDateTime};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -154,27 +151,6 @@ pub struct AnnualReport {
     pub interrupted: bool,
     /// The memory cap, the peak resident memory and each stage's peak.
     pub memory: super::report::MemoryReport,
-}
-
-/// One planned timestep.
-struct Planned<'w> {
-    record: &'w WeatherRecord,
-    time: NaiveDateTime,
-}
-
-/// The result of one step: total and sun-only illuminance per sensor, lux.
-#[derive(Clone, Default)]
-struct StepOut {
-    total: Vec<f64>,
-    sun: Vec<f64>,
-    surfaces: Vec<f64>,
-    rel_err: Vec<f32>,
-    sweeps: u32,
-    /// The light paths' values of a lit step (`annual --leed` with aperture groups).
-    paths: Option<PathValues>,
-    /// The lit step's cut, when the paths evaluate a batch of steps at once
-    /// ([`Paths::batched`]).
-    path_cut: Option<Vec<Source>>,
 }
 
 /// How a caller steers a long run: `stop` is polled between batches of days (set it from
@@ -562,168 +538,4 @@ pub fn run_annual(
         .map_err(|e| Error::Internal(format!("report serialisation: {e}")))?;
     crate::files::write_atomic(&out.join("report.json"), json.as_bytes())?;
     Ok(report)
-}
-
-/// What a step needs.
-pub(super) enum Kind {
-    Missing,
-    Night,
-    Day { sun: bool },
-}
-
-/// Night: no diffuse light, and no beam or no sun above the horizon (every sequence
-/// over a weather file skips such records).
-pub(super) fn is_night(r: &WeatherRecord, sun_altitude_deg: f64) -> bool {
-    r.dhi <= 0.0 && (r.dni <= 0.0 || sun_altitude_deg <= 0.0)
-}
-
-/// What the weather record `r` asks of a step of `scene`.
-pub(super) fn classify(scene: &Scene, r: &WeatherRecord) -> Kind {
-    if r.missing {
-        return Kind::Missing;
-    }
-    let sun = solar_position(r.utc(&scene.site), &scene.site);
-    if is_night(r, sun.altitude_deg()) {
-        return Kind::Night;
-    }
-    Kind::Day {
-        sun: sun.altitude_deg() > 0.0 && r.dni > 0.0,
-    }
-}
-
-/// When the step of weather record `r` is, at `scene`'s site.
-pub(super) fn step_time(scene: &Scene, r: &WeatherRecord) -> StepTime {
-    StepTime {
-        utc: r.utc(&scene.site),
-        local: r.time,
-    }
-}
-
-/// The Perez sky of a weather record.
-pub(super) fn perez(r: &WeatherRecord) -> SkySpec {
-    SkySpec::Perez {
-        dni: r.dni,
-        dhi: r.dhi,
-        dew_point_c: r.dew_point_c,
-    }
-}
-
-struct Ctx<'a> {
-    scene: &'a Scene,
-    weather: &'a Weather,
-    engine: &'a Engine<'a>,
-    stages: Mutex<StageTimes>,
-    /// LEED's light paths, evaluated on each lit step's sky and cut.
-    paths: Option<&'a Paths<'a>>,
-}
-
-impl Ctx<'_> {
-    /// One day's steps: independent (in parallel) with daylight coefficients, otherwise a
-    /// chain warm-started from the day's first lit step.
-    fn run_day(&self, day: &[Planned]) -> Result<Vec<StepOut>> {
-        if self.engine.steps_are_independent() {
-            return day
-                .par_iter()
-                .map(|s| self.run_step(s, &mut None))
-                .collect();
-        }
-        let mut state: Option<TransportState> = None;
-        day.iter().map(|s| self.run_step(s, &mut state)).collect()
-    }
-
-    fn run_step(&self, s: &Planned, state: &mut Option<TransportState>) -> Result<StepOut> {
-        let n = self.scene.sensors.len();
-        if !matches!(classify(self.scene, s.record), Kind::Day { .. }) {
-            return Ok(StepOut {
-                total: vec![0.0; n],
-                sun: vec![0.0; n],
-                surfaces: vec![0.0; self.engine.surfaces().map_or(0, |m| m.columns())],
-                ..StepOut::default()
-            });
-        }
-        let r = s.record;
-        let at = step_time(self.scene, s.record);
-        let spec = perez(r);
-        let (sky, mut report) = self.sky(s, &at, &spec)?;
-        let (mut paths, mut path_cut) = (None, None);
-        let step = match self.paths {
-            None => self
-                .engine
-                .step_sky(&sky, state.as_ref(), false, report, spec.irradiance()),
-            Some(p) => {
-                // One cut of the sky for the run and every light path.
-                let q = self.engine.directions().quality();
-                let cut = report
-                    .stage_seconds
-                    .time("sources", || sources_for(&sky, q));
-                let batched = p.batched();
-                if batched {
-                    p.forget_sky(&at, &spec);
-                } else {
-                    paths = Some(p.values(&at, &spec, &sky, &cut));
-                }
-                let step = self.engine.step_sources(
-                    &sky,
-                    &cut,
-                    state.as_ref(),
-                    false,
-                    report,
-                    spec.irradiance(),
-                );
-                if batched {
-                    path_cut = Some(cut.sources);
-                }
-                step
-            }
-        };
-        self.stages
-            .lock()
-            .expect("stages lock")
-            .merge(&step.report.stage_seconds);
-        if step.state.is_some() {
-            *state = step.state;
-        }
-        Ok(StepOut {
-            total: step.sensors.iter().map(|v| v.lux).collect(),
-            sun: step.sensors.iter().map(|v| v.lux_sun).collect(),
-            surfaces: step.surfaces,
-            rel_err: step
-                .sensors
-                .iter()
-                .filter_map(|v| v.relative_error(10.0).map(|e| e as f32))
-                .collect(),
-            sweeps: step.report.transport_solve.map_or(0, |t| t.sweeps),
-            paths,
-            path_cut,
-        })
-    }
-
-    /// The step's sky and begun report ([`Engine::sky`]), its error naming the record.
-    fn sky(&self, s: &Planned, at: &StepTime, spec: &SkySpec) -> Result<(Sky, Report)> {
-        let r = s.record;
-        self.engine.sky(at, spec).map_err(|e| {
-            Error::input(
-                &self.weather.path,
-                Some(r.line),
-                Some(&format!("DNI {} DHI {}", r.dni, r.dhi)),
-                format!("cannot build the Perez sky: {e}"),
-            )
-        })
-    }
-
-    /// Only the light paths' values of a step (`None` without daylight): the rows of
-    /// resumed days, whose run values are already written.
-    fn path_step(&self, s: &Planned) -> Result<Option<PathValues>> {
-        let Some(p) = self.paths else {
-            return Ok(None);
-        };
-        if !matches!(classify(self.scene, s.record), Kind::Day { .. }) {
-            return Ok(None);
-        }
-        let at = step_time(self.scene, s.record);
-        let spec = perez(s.record);
-        let (sky, _) = self.sky(s, &at, &spec)?;
-        let cut = sources_for(&sky, self.engine.directions().quality());
-        Ok(Some(p.values(&at, &spec, &sky, &cut)))
-    }
 }

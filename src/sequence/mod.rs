@@ -24,6 +24,7 @@ pub mod instant;
 pub mod df;
 pub mod convergence;
 pub mod annual;
+mod annual_steps;
 pub mod merge;
 pub mod light_paths;
 mod path_pass;
