@@ -42,6 +42,51 @@ use std::time::Instant;
 /// Days computed in parallel between checkpoints.
 const DAYS_PER_BATCH: usize = 8;
 
+/// A batch of days computed and not yet written.
+struct Computed<'b, 'w> {
+    batch: &'b [Vec<Planned<'w>>],
+    results: Vec<Vec<StepOut>>,
+    /// The batched light paths' rows, one per lit step in order.
+    path_rows: Vec<PathValues>,
+}
+
+impl Computed<'_, '_> {
+    /// Appends the batch's rows to the series and checkpoints them; the steps written.
+    fn write(
+        self,
+        w_total: &mut IlluminanceWriter,
+        w_sun: &mut IlluminanceWriter,
+        w_surf: &mut Option<IlluminanceWriter>,
+        paths: Option<&Paths>,
+    ) -> Result<usize> {
+        let mut path_rows = self.path_rows.into_iter();
+        let mut steps = 0;
+        for (day, outs) in self.batch.iter().zip(&self.results) {
+            for (s, o) in day.iter().zip(outs) {
+                w_total.append(s.time, &o.total)?;
+                w_sun.append(s.time, &o.sun)?;
+                if let Some(w) = w_surf {
+                    w.append(s.time, &o.surfaces)?;
+                }
+                if let Some(p) = paths {
+                    let row = match o.path_cut {
+                        Some(_) => path_rows.next(),
+                        None => None,
+                    };
+                    p.append(s.time, row.as_ref().or(o.paths.as_ref()))?;
+                }
+            }
+            steps += day.len();
+        }
+        w_total.checkpoint()?;
+        w_sun.checkpoint()?;
+        if let Some(w) = w_surf {
+            w.checkpoint()?;
+        }
+        Ok(steps)
+    }
+}
+
 /// What an annual run is asked to do besides the defaults.
 #[derive(Clone, Debug)]
 pub struct AnnualOptions {
@@ -367,57 +412,64 @@ pub fn run_annual(
     progress(done, total_steps);
     let mut errs: Vec<f32> = Vec::new();
     let todo = &days[resumed_days..];
+    // A batch's rows are written while the next batch is computed: written after it, they
+    // kept the workers idle for a tenth of a warm year.
+    let mut pending: Option<Computed> = None;
+    let mut written = report.resumed;
     for batch in todo.chunks(DAYS_PER_BATCH) {
         if report.interrupted || stop.load(Ordering::SeqCst) {
             report.interrupted = true;
             break;
         }
-        let results: Vec<Result<Vec<StepOut>>> = engine.peaks().measure("steps", || {
-            batch.par_iter().map(|day| ctx.run_day(day)).collect()
-        });
+        let (wrote, results) = rayon::join(
+            || {
+                pending.take().map_or(Ok(0), |c| {
+                    c.write(&mut w_total, &mut w_sun, &mut w_surf, paths.as_ref())
+                })
+            },
+            || {
+                engine.peaks().measure("steps", || {
+                    batch
+                        .par_iter()
+                        .map(|day| ctx.run_day(day))
+                        .collect::<Vec<Result<Vec<StepOut>>>>()
+                })
+            },
+        );
+        written += wrote?;
         let results: Vec<Vec<StepOut>> = results.into_iter().collect::<Result<_>>()?;
         // Batched light paths: every lit step's cut of the batch at once.
-        let mut path_rows = match &paths {
+        let path_rows = match &paths {
             Some(p) if p.batched() => {
                 let cuts: Vec<&[Source]> = results
                     .iter()
                     .flatten()
                     .filter_map(|o| o.path_cut.as_deref())
                     .collect();
-                p.values_of_cuts(&cuts).into_iter()
+                p.values_of_cuts(&cuts)
             }
-            _ => Vec::new().into_iter(),
+            _ => Vec::new(),
         };
-        for (day, outs) in batch.iter().zip(results) {
-            for (s, o) in day.iter().zip(&outs) {
-                w_total.append(s.time, &o.total)?;
-                w_sun.append(s.time, &o.sun)?;
-                if let Some(w) = &mut w_surf {
-                    w.append(s.time, &o.surfaces)?;
-                }
-                if let Some(p) = &paths {
-                    let row = match o.path_cut {
-                        Some(_) => path_rows.next(),
-                        None => None,
-                    };
-                    p.append(s.time, row.as_ref().or(o.paths.as_ref()))?;
-                }
+        for (day, outs) in batch.iter().zip(&results) {
+            for o in outs {
                 report.sweeps += o.sweeps as u64;
                 errs.extend_from_slice(&o.rel_err);
-                if o.total.is_empty() {
-                    continue;
-                }
             }
             report.computed += day.len();
             done += day.len();
         }
-        w_total.checkpoint()?;
-        w_sun.checkpoint()?;
-        if let Some(w) = &mut w_surf {
-            w.checkpoint()?;
-        }
+        // Counted once computed: a stop asked for now still writes this batch.
         progress(done, total_steps);
+        pending = Some(Computed {
+            batch,
+            results,
+            path_rows,
+        });
     }
+    if let Some(c) = pending.take() {
+        written += c.write(&mut w_total, &mut w_sun, &mut w_surf, paths.as_ref())?;
+    }
+    debug_assert_eq!(written, done);
     // Step counts (the plan, so resumed runs report the same).
     for s in days.iter().flatten() {
         match classify(scene, s.record) {

@@ -129,10 +129,9 @@ impl Ctx<'_> {
                 .step_sky(&sky, state.as_ref(), false, report, spec.irradiance()),
             Some(p) => {
                 // One cut of the sky for the run and every light path.
-                let q = self.engine.directions().quality();
                 let cut = report
                     .stage_seconds
-                    .time("sources", || sources_for(&sky, q));
+                    .time("sources", || self.engine.cut(&sky, false));
                 let batched = p.batched();
                 if batched {
                     p.forget_sky(&at, &spec);

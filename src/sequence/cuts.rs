@@ -21,7 +21,7 @@ use std::collections::BTreeMap;
 
 /// Version of the cuts a record lists, hashed into its key: bumped whenever the sky
 /// models, the subdivision or the sun grid change what a step's cut is.
-pub const CUTS_VERSION: u32 = 2;
+pub const CUTS_VERSION: u32 = 3;
 
 /// Section tag: three u64 per node ([`encode_key`]).
 const TAG_NODES: u32 = FIRST_USER_TAG;

@@ -55,11 +55,34 @@ pub struct SkySources {
     pub negligible: usize,
     /// Angle between the true and the snapped sun, degrees, when the sun is a source.
     pub sun_snapping_deg: Option<f64>,
+    /// The sources at the coarser quality of the error estimate (sun last), when they were
+    /// cut in the same walk ([`sources_with_coarse`]); the same as [`sources_for`] there.
+    pub coarse: Option<Vec<Source>>,
 }
 
 /// Subdivides `sky` into parallel sources at `quality`.
 pub fn sources_for(sky: &Sky, quality: &Quality) -> SkySources {
-    let s = sources::sky_sources(sky, &quality.sky);
+    cut(sky, quality, None)
+}
+
+/// [`sources_for`] at `quality` with [`SkySources::coarse`] at `coarse` (the error
+/// estimate's level), both in one walk of the sky: a step of an annual run needs both,
+/// and the coarser cut visits only nodes the finer one evaluates.
+pub fn sources_with_coarse(sky: &Sky, quality: &Quality, coarse: &Quality) -> SkySources {
+    cut(sky, quality, Some(coarse))
+}
+
+fn cut(sky: &Sky, quality: &Quality, coarse: Option<&Quality>) -> SkySources {
+    let levels: Vec<sources::SkyParams> = std::iter::once(quality.sky)
+        .chain(coarse.map(|c| c.sky))
+        .collect();
+    let mut cuts = sources::sky_sources_levels(sky, &levels);
+    let coarse = coarse.map(|c| {
+        let mut list = cuts.pop().expect("the coarse cut").sources;
+        list.extend(sources::sun_source(sky, c.sun_spacing_deg).map(|(sun, _)| sun));
+        list
+    });
+    let s = cuts.pop().expect("the cut");
     let mut list = s.sources;
     let mut snap = None;
     if let Some((sun, e)) = sources::sun_source(sky, quality.sun_spacing_deg) {
@@ -70,6 +93,7 @@ pub fn sources_for(sky: &Sky, quality: &Quality) -> SkySources {
         sources: list,
         negligible: s.negligible,
         sun_snapping_deg: snap,
+        coarse,
     }
 }
 
@@ -174,4 +198,43 @@ pub fn image_sky(
         ground_radiance: sky::ground_radiance(ground_reflectance, e_h),
         warnings,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::site::direction_from_alt_az;
+
+    #[test]
+    fn one_walk_cuts_both_levels_as_two_walks_do() {
+        // A clear sky with a low sun (steep gradients at the horizon and around the sun),
+        // an overcast one, and a dark one, at every preset: the coarse cut made in the
+        // fine cut's walk must be the same sources, bit for bit and in order.
+        let skies = [
+            crate::sky::perez::sky(
+                850.0,
+                90.0,
+                direction_from_alt_az(8.0, 120.0),
+                172,
+                5.0,
+                0.2,
+            ),
+            crate::sky::perez::sky(0.0, 300.0, direction_from_alt_az(40.0, 200.0), 80, 2.0, 0.2),
+            crate::sky::perez::sky(0.0, 0.0, direction_from_alt_az(20.0, 90.0), 10, 0.0, 0.2),
+        ];
+        for sky in skies {
+            let sky = sky.expect("valid sky");
+            for name in ["draft", "default", "high", "reference"] {
+                let q = Quality::preset(name).expect("preset");
+                let c = q.coarser();
+                let both = sources_with_coarse(&sky, &q, &c);
+                let (fine, coarse) = (sources_for(&sky, &q), sources_for(&sky, &c));
+                assert_eq!(both.sources, fine.sources, "{name}");
+                assert_eq!(both.negligible, fine.negligible, "{name}");
+                assert_eq!(both.sun_snapping_deg, fine.sun_snapping_deg, "{name}");
+                assert_eq!(both.coarse.as_ref(), Some(&coarse.sources), "{name}");
+                assert!(fine.coarse.is_none());
+            }
+        }
+    }
 }

@@ -417,8 +417,20 @@ impl<'a> Engine<'a> {
         // 2. Sources.
         let s = report
             .stage_seconds
-            .time("sources", || sources_for(sky, self.dirs.quality()));
+            .time("sources", || self.cut(sky, detail));
         self.step_sources(sky, &s, previous, detail, report, dni_dhi)
+    }
+
+    /// The cut of `sky` a step at this engine's quality needs (`detail`: with the
+    /// solution, as [`Self::step_sky`]): with daylight coefficients and an error estimate,
+    /// the coarser level's cut too, in the same walk.
+    pub fn cut(&self, sky: &Sky, detail: bool) -> SkySources {
+        let q = self.dirs.quality();
+        if self.coefficients.is_some() && !detail && !self.opts.values_only {
+            super::sky::sources_with_coarse(sky, q, self.coarse.quality())
+        } else {
+            sources_for(sky, q)
+        }
     }
 
     /// [`Self::step_sky`] for sources already cut from `sky` at this engine's quality
@@ -445,11 +457,18 @@ impl<'a> Engine<'a> {
                     let mut v = c.evaluate_values_batch(&batch, &[sun_fine]);
                     return (v.pop().expect("one step"), Vec::new());
                 }
-                let coarse = sources_for(sky, self.coarse.quality()).sources;
-                let sun_coarse = self.sun_lux(&self.coarse, &coarse);
+                let made;
+                let coarse = match &s.coarse {
+                    Some(c) => c,
+                    None => {
+                        made = sources_for(sky, self.coarse.quality()).sources;
+                        &made
+                    }
+                };
+                let sun_coarse = self.sun_lux(&self.coarse, coarse);
                 c.evaluate(
                     &sources,
-                    &coarse,
+                    coarse,
                     &sun_fine,
                     &sun_coarse,
                     &self.coarse,

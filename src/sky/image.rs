@@ -271,6 +271,10 @@ impl SkyDistribution for ImageSky {
         self.pixel_of(dir).map_or(Rgb::ZERO, |p| self.rgb[p])
     }
 
+    fn integrates(&self) -> bool {
+        true
+    }
+
     fn mean_over(&self, v: &[DVec3; 3]) -> Option<Rgb> {
         // Edge planes of the spherical triangle (counter-clockwise or not: take the side
         // the third vertex is on).

@@ -23,6 +23,12 @@ pub trait SkyDistribution: Send + Sync {
     fn mean_over(&self, _v: &[DVec3; 3]) -> Option<Rgb> {
         None
     }
+
+    /// Whether [`Self::mean_over`] can answer: the sky tree then asks it, and otherwise
+    /// does not build the triangles to ask about.
+    fn integrates(&self) -> bool {
+        false
+    }
 }
 
 /// The sun as a parallel source.

@@ -210,7 +210,12 @@ impl PerezParameters {
     /// `gamma` (radians) from the sun, floored at 0 as in gendaymtx. cos ζ is floored at
     /// 0.01 (as Radiance's perezlum.cal), or at [`POSITIVE_B_MIN_COS_ZENITH`] when b > 0.
     pub fn relative_luminance(&self, cos_zeta: f64, gamma: f64) -> f64 {
-        let cos_g = gamma.cos();
+        self.luminance(cos_zeta, gamma, gamma.cos())
+    }
+
+    /// [`Self::relative_luminance`] given cos γ as well, where the caller has it (the
+    /// cosine of the arc cosine cost a twentieth of a warm annual run).
+    fn luminance(&self, cos_zeta: f64, gamma: f64, cos_g: f64) -> f64 {
         let floor = if self.b > 0.0 {
             POSITIVE_B_MIN_COS_ZENITH
         } else {
@@ -340,8 +345,8 @@ struct PerezDistribution {
 
 impl SkyDistribution for PerezDistribution {
     fn radiance(&self, dir: DVec3) -> Rgb {
-        let gamma = dir.dot(self.sun_dir).clamp(-1.0, 1.0).acos();
-        Rgb::splat(self.scale * self.params.relative_luminance(dir.z, gamma))
+        let cos_g = dir.dot(self.sun_dir).clamp(-1.0, 1.0);
+        Rgb::splat(self.scale * self.params.luminance(dir.z, cos_g.acos(), cos_g))
     }
 }
 

@@ -4,11 +4,12 @@
 //! more parallel source with its direction snapped to a fixed grid.
 
 pub mod direction_key;
+mod node_geometry;
 pub mod subdivision;
 pub mod sun_grid;
 
 pub use direction_key::{SkyNodeKey, SunKey};
-pub use subdivision::{node_source, sky_sources, sun_source, SkyParams};
+pub use subdivision::{node_source, sky_sources, sky_sources_levels, sun_source, SkyParams};
 pub use sun_grid::SunGrid;
 
 use crate::photometry::Rgb;

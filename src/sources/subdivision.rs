@@ -5,8 +5,8 @@
 //! adaptivity can produce is a node of the same fixed quadtree, so keys repeat exactly
 //! across instants. The ground glow below the horizon is uniform and gets a fixed depth.
 
+use super::node_geometry::{child_vertices, geometry, NodeGeometry};
 use super::{SkyNodeKey, Source, SourceKey, SunKey};
-use crate::math::spherical_triangle;
 use crate::photometry::{grey, Rgb};
 use crate::sky::Sky;
 use glam::DVec3;
@@ -80,34 +80,28 @@ pub struct SkySources {
     pub negligible: usize,
 }
 
-/// Average radiance of a node: mean of the three vertices and the centre (§4). Sky nodes
-/// evaluate the sky just above the horizon for vertices on it.
-fn node_radiance(sky: &Sky, key: SkyNodeKey, v: &[DVec3; 3]) -> (Rgb, f64, [Rgb; 4]) {
-    node_radiance_split(sky, key, &spherical_triangle::split(v[0], v[1], v[2]))
-}
-
-/// [`node_radiance`] from the node's four children (`split` of its vertices).
-fn node_radiance_split(sky: &Sky, key: SkyNodeKey, kids: &[[DVec3; 3]; 4]) -> (Rgb, f64, [Rgb; 4]) {
+/// Average radiance of a node (`g`: its geometry): the solid-angle-weighted mean of the
+/// radiance at its four children's centres, with their spread and the four values. Sky
+/// nodes evaluate the sky just above the horizon for centres on it.
+fn node_radiance(sky: &Sky, key: SkyNodeKey, g: &NodeGeometry) -> (Rgb, f64, [Rgb; 4]) {
     if !key.is_sky() {
         return (sky.ground_radiance, 0.0, [sky.ground_radiance; 4]);
     }
-    let lift = |d: DVec3| {
-        if d.z < 1e-6 {
-            DVec3::new(d.x, d.y, 1e-6).normalize()
-        } else {
-            d
-        }
-    };
     // Centres of the four children: a 4-point centroid rule (same cost as the paper's
     // vertices + centre, smaller error on curved radiance; see docs/design.md).
     // A distribution that integrates exactly (an image) gives each child's mean instead.
-    let l = kids.map(|k| {
-        sky.distribution
-            .as_ref()
-            .and_then(|d| d.mean_over(&k))
-            .unwrap_or_else(|| sky.radiance(lift(spherical_triangle::centre(k[0], k[1], k[2]))))
-    });
-    let w = kids.map(|k| spherical_triangle::solid_angle(k[0], k[1], k[2]));
+    let l = match sky.distribution.as_ref() {
+        Some(d) if d.integrates() => {
+            let kids = (0..4u8).map(|k| child_vertices(key, &g.vertices, k));
+            let means: Vec<Rgb> = kids
+                .zip(g.child_centres)
+                .map(|(k, c)| d.mean_over(&k).unwrap_or_else(|| sky.radiance(c)))
+                .collect();
+            [means[0], means[1], means[2], means[3]]
+        }
+        _ => g.child_centres.map(|c| sky.radiance(c)),
+    };
+    let w = g.child_solid_angles;
     let total: f64 = w.iter().sum();
     let mean = (0..4).fold(Rgb::ZERO, |a, k| a + l[k] * w[k]) / total;
     let (lo, hi) = l
@@ -121,82 +115,98 @@ fn node_radiance_split(sky: &Sky, key: SkyNodeKey, kids: &[[DVec3; 3]; 4]) -> (R
 /// radiance): bit-identical in those to the source a cut makes of it, since the cut's
 /// vertices are the same splits [`SkyNodeKey::vertices`] repeats.
 pub fn node_source(key: SkyNodeKey) -> Source {
-    make_source(key, key.vertices(), Rgb::ZERO, [Rgb::ZERO; 4])
+    let v = key.vertices();
+    make_source(key, &geometry(key, &v), Rgb::ZERO, [Rgb::ZERO; 4])
 }
 
-fn make_source(key: SkyNodeKey, v: [DVec3; 3], radiance: Rgb, children: [Rgb; 4]) -> Source {
-    let omega = spherical_triangle::solid_angle(v[0], v[1], v[2]);
-    let dir = spherical_triangle::centre(v[0], v[1], v[2]);
+fn make_source(key: SkyNodeKey, g: &NodeGeometry, radiance: Rgb, children: [Rgb; 4]) -> Source {
     Source {
         key: if key.is_sky() {
             SourceKey::Sky(key)
         } else {
             SourceKey::Ground(key)
         },
-        direction: dir,
-        normal_irradiance: radiance * omega,
+        direction: g.centre,
+        normal_irradiance: radiance * g.solid_angle,
         radiance,
         child_radiance: children,
-        solid_angle: omega,
-        vertices: Some(v),
-        true_direction: dir,
+        solid_angle: g.solid_angle,
+        vertices: Some(g.vertices),
+        true_direction: g.centre,
     }
 }
 
 /// Subdivides `sky` into parallel sources (sky above the horizon, ground glow below).
 pub fn sky_sources(sky: &Sky, params: &SkyParams) -> SkySources {
+    sky_sources_levels(sky, &[*params]).pop().expect("one cut")
+}
+
+/// [`sky_sources`] for each of `levels` (at most 8) in one walk of the quadtree: each
+/// node's radiance is evaluated once for every cut that visits it, so a step's cut and
+/// the coarser one of its error estimate cost little more than the finer alone. Each cut
+/// is the same, to the bit and in order, as [`sky_sources`] at its level.
+pub fn sky_sources_levels(sky: &Sky, levels: &[SkyParams]) -> Vec<SkySources> {
+    assert!(levels.len() <= 8, "at most 8 levels in one walk");
+    let mut out = vec![SkySources::default(); levels.len()];
     // Reference energy: ∫L dω over the sky at depth 2 (cheap, and only sets thresholds).
     let mut reference = 0.0;
     for b in 0..4u8 {
         for k1 in 0..4 {
             for k2 in 0..4 {
                 let key = SkyNodeKey::root(b).child(k1).child(k2);
-                let v = key.vertices();
-                reference += grey(
-                    node_radiance(sky, key, &v).0
-                        * spherical_triangle::solid_angle(v[0], v[1], v[2]),
-                );
+                let g = geometry(key, &key.vertices());
+                reference += grey(node_radiance(sky, key, &g).0 * g.solid_angle);
             }
         }
     }
     reference += grey(sky.ground_radiance) * 2.0 * std::f64::consts::PI;
-    let mut out = SkySources::default();
     if reference <= 0.0 || !reference.is_finite() {
         return out;
     }
     // Each node carries its vertices down (the same splits `SkyNodeKey::vertices` repeats
-    // from the root, so bit-identical, without the repetition).
-    let mut stack: Vec<(SkyNodeKey, [DVec3; 3])> = (0..8u8)
+    // from the root, so bit-identical, without the repetition), and the set of cuts still
+    // splitting towards it (bit i: `levels[i]`); its geometry is remembered for the process
+    // ([`node_geometry`]) down to `default`'s depth. Depth first in child order, so each
+    // cut's sources come in the order of its own walk.
+    let all = (1u16 << levels.len()) as u8 - 1;
+    let mut stack: Vec<(SkyNodeKey, [DVec3; 3], u8)> = (0..8u8)
         .rev()
-        .map(|b| (SkyNodeKey::root(b), SkyNodeKey::root(b).vertices()))
+        .map(|b| (SkyNodeKey::root(b), SkyNodeKey::root(b).vertices(), all))
         .collect();
-    while let Some((key, v)) = stack.pop() {
-        let kids = spherical_triangle::split(v[0], v[1], v[2]);
-        let (l, variation, children) = node_radiance_split(sky, key, &kids);
-        let omega = spherical_triangle::solid_angle(v[0], v[1], v[2]);
+    while let Some((key, v, active)) = stack.pop() {
+        let g = geometry(key, &v);
+        let (l, variation, children) = node_radiance(sky, key, &g);
+        let omega = g.solid_angle;
         let depth = key.depth();
-        let split = if key.is_sky() {
-            depth < params.min_depth
-                || (depth < params.max_depth
-                    && omega > params.min_solid_angle_sr
-                    && (grey(l) * omega > params.max_irradiance_fraction * reference
-                        || variation * omega > params.max_variation * reference))
-        } else {
-            grey(l) > 0.0
-                && (depth < params.ground_depth
-                    || (depth < params.ground_horizon_depth && touches_horizon(&v)))
-        };
-        if split {
-            for k in (0..4).rev() {
-                stack.push((key.child(k), kids[k as usize]));
+        let mut splitting = 0u8;
+        for (i, params) in levels.iter().enumerate() {
+            if active & (1 << i) == 0 {
+                continue;
             }
-            continue;
+            let split = if key.is_sky() {
+                depth < params.min_depth
+                    || (depth < params.max_depth
+                        && omega > params.min_solid_angle_sr
+                        && (grey(l) * omega > params.max_irradiance_fraction * reference
+                            || variation * omega > params.max_variation * reference))
+            } else {
+                grey(l) > 0.0
+                    && (depth < params.ground_depth
+                        || (depth < params.ground_horizon_depth && touches_horizon(&v)))
+            };
+            if split {
+                splitting |= 1 << i;
+            } else if grey(l) * omega <= params.negligible_fraction * reference || grey(l) <= 0.0 {
+                out[i].negligible += 1;
+            } else {
+                out[i].sources.push(make_source(key, &g, l, children));
+            }
         }
-        if grey(l) * omega <= params.negligible_fraction * reference || grey(l) <= 0.0 {
-            out.negligible += 1;
-            continue;
+        if splitting != 0 {
+            for k in (0..4).rev() {
+                stack.push((key.child(k), child_vertices(key, &v, k), splitting));
+            }
         }
-        out.sources.push(make_source(key, v, l, children));
     }
     out
 }
@@ -238,6 +248,7 @@ pub fn sun_source(sky: &Sky, spacing_deg: f64) -> Option<(Source, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::spherical_triangle;
     use crate::sky::{SkyDistribution, Sun};
     use std::f64::consts::PI;
 
