@@ -41,6 +41,7 @@ pub(super) struct StepOut {
 }
 
 /// What a step needs.
+#[derive(Clone, Copy)]
 pub(super) enum Kind {
     Missing,
     Night,
