@@ -79,7 +79,7 @@ pub struct Element {
 pub struct Hierarchy {
     /// All elements; `elements[t]` is the root of triangle `t`.
     pub elements: Vec<Element>,
-    index: HashMap<ElementKey, u32>,
+    index: HashMap<ElementKey, u32, ahash::RandomState>,
 }
 
 impl Hierarchy {

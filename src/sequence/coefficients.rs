@@ -158,9 +158,9 @@ pub struct Coefficients {
     sensors: usize,
     parts: usize,
     grid: SunGrid,
-    nodes: HashMap<SourceKey, NodeData>,
+    nodes: HashMap<SourceKey, NodeData, ahash::RandomState>,
     /// Coarser level's nodes: 4 rows of child responses.
-    coarse: Mutex<HashMap<SourceKey, std::sync::Arc<Vec<f32>>>>,
+    coarse: Mutex<HashMap<SourceKey, std::sync::Arc<Vec<f32>>, ahash::RandomState>>,
     /// Preparation counters.
     pub stats: CoefficientStats,
 }
@@ -342,7 +342,7 @@ impl Coefficients {
                 data[i] = Some(nd);
             }
         }
-        let nodes: HashMap<SourceKey, NodeData> = list
+        let nodes: HashMap<SourceKey, NodeData, ahash::RandomState> = list
             .iter()
             .zip(data)
             .map(|(src, d)| {
@@ -367,7 +367,7 @@ impl Coefficients {
             parts,
             grid,
             nodes,
-            coarse: Mutex::new(HashMap::new()),
+            coarse: Mutex::new(HashMap::default()),
             stats,
         };
         Ok((c, skies))

@@ -19,7 +19,7 @@ pub type MeshWeights = Arc<Vec<(u32, Rgb)>>;
 /// Mesh weights of every direction a run has met, keyed by direction and LDI resolution:
 /// a sequence transfers each direction once.
 #[derive(Default)]
-pub struct MeshMemo(Mutex<HashMap<(SourceKey, u32), MeshWeights>>);
+pub struct MeshMemo(Mutex<HashMap<(SourceKey, u32), MeshWeights, ahash::RandomState>>);
 
 impl MeshMemo {
     /// The weights of `src` (projected at LDI resolution `res` into `record`) on `op`'s
