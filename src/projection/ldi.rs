@@ -65,6 +65,17 @@ pub const COINCIDENT_M: f32 = 5e-4;
 /// * among faces facing the same way the smaller triangle shows (nearest its side): a
 ///   floor on a ground plane, a door on its wall — the detail lying on the context.
 pub fn order_coincident(list: &mut [Fragment], scene: &ProjectionScene, dir: DVec3) {
+    order_coincident_facing(list, scene, &|k| scene.normals[k].dot(dir) > 0.0);
+}
+
+/// [`order_coincident`] with `facing(k)`: whether triangle `k` faces the source (n·dir > 0).
+/// An LDI's pixels ask it of every coincident pair (a face and its back face), so the LDI
+/// computes it once per triangle.
+fn order_coincident_facing(
+    list: &mut [Fragment],
+    scene: &ProjectionScene,
+    facing: &impl Fn(usize) -> bool,
+) {
     let mut start = 0;
     while start < list.len() {
         let top = list[start].height;
@@ -81,10 +92,7 @@ pub fn order_coincident(list: &mut [Fragment], scene: &ProjectionScene, dir: DVe
         if end - start > 1 {
             list[start..end].sort_by(|a, b| {
                 let (ta, tb) = (a.tri as usize, b.tri as usize);
-                let (fa, fb) = (
-                    scene.normals[ta].dot(dir) > 0.0,
-                    scene.normals[tb].dot(dir) > 0.0,
-                );
+                let (fa, fb) = (facing(ta), facing(tb));
                 // Facing the source first; then the smaller first when facing it (it shows
                 // to the source side), the smaller last when facing away (it shows to the
                 // far side).
@@ -282,11 +290,13 @@ impl Ldi {
         let pass: Vec<Rgb> = (0..scene.vertices.len())
             .map(|k| scene.pass_factor(k, dir))
             .collect();
+        let facing: Vec<bool> = scene.normals.iter().map(|n| n.dot(dir) > 0.0).collect();
+        let facing = |k: usize| facing[k];
         for px in 0..n_pix {
             let list = &mut fragments[offsets[px] as usize..offsets[px + 1] as usize];
             // Nearest the source first; ties broken by triangle index for determinism.
             list.sort_unstable_by(|a, b| b.height.total_cmp(&a.height).then(a.tri.cmp(&b.tri)));
-            order_coincident(list, scene, dir);
+            order_coincident_facing(list, scene, &facing);
             let mut t = Rgb::ONE;
             for f in list.iter_mut() {
                 f.t_in = [t.x as f32, t.y as f32, t.z as f32];
