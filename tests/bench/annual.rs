@@ -28,7 +28,8 @@
 //! June instead of the year or the week), `--start YYYY-MM-DD` / `--end YYYY-MM-DD`,
 //! `--radiance-nproc N` (rfluxmtx `-n`; default: every core, as daystep uses),
 //! `--radiance-opts "…"` (rfluxmtx settings instead of `-ab 5 -ad 10000 -lw 1e-5`), and
-//! for `--scaling` `--max-sensors N` / `--max-triangles N` (skip larger sweep points).
+//! for `--scaling` `--max-sensors N` / `--max-triangles N` (skip larger sweep points) and
+//! `--point TRIANGLES:SENSORS` (repeatable: only these sweep points, e.g. `10000:10000`).
 //!
 //! Every daystep run is a child process (this binary again, `--child …`) so that its peak
 //! resident memory (VmHWM, read by the child at its end) and wall time are its own; the
@@ -75,6 +76,8 @@ struct Opts {
     radiance_opts: Option<String>,
     max_sensors: usize,
     max_triangles: usize,
+    /// `--point T:S`: only these (triangles, sensors) points of the scaling sweep.
+    points: Vec<(usize, usize)>,
 }
 
 fn parse_opts(args: &[String]) -> Opts {
@@ -90,6 +93,7 @@ fn parse_opts(args: &[String]) -> Opts {
         radiance_opts: None,
         max_sensors: usize::MAX,
         max_triangles: usize::MAX,
+        points: Vec::new(),
     };
     let date = |s: &str| {
         NaiveDate::parse_from_str(s, "%Y-%m-%d")
@@ -118,10 +122,18 @@ fn parse_opts(args: &[String]) -> Opts {
             "--radiance-opts" => o.radiance_opts = Some(value()),
             "--max-sensors" => o.max_sensors = num(value()),
             "--max-triangles" => o.max_triangles = num(value()),
+            "--point" => {
+                let v = value();
+                let (t, s) = v
+                    .split_once(':')
+                    .unwrap_or_else(|| panic!("--point wants TRIANGLES:SENSORS, not {v:?}"));
+                o.points.push((num(t.into()), num(s.into())));
+            }
             other => panic!(
                 "unknown argument {other:?}; modes: --office-only, --no-radiance, --scaling \
                  (trial options: --days N, --start/--end YYYY-MM-DD, --radiance-nproc N, \
-                 --radiance-opts \"…\", --max-sensors N, --max-triangles N)"
+                 --radiance-opts \"…\", --max-sensors N, --max-triangles N, \
+                 --point TRIANGLES:SENSORS)"
             ),
         }
     }
@@ -808,8 +820,11 @@ fn scaling(root: &Path, o: &Opts, work: &Path, tmp: &Path) {
     ];
     let mut points = Vec::new();
     for (sweep, tris, sensors) in plan {
-        if tris > o.max_triangles || sensors > o.max_sensors {
-            eprintln!("skipping {tris} triangles × {sensors} sensors (--max-…)");
+        if tris > o.max_triangles
+            || sensors > o.max_sensors
+            || !(o.points.is_empty() || o.points.contains(&(tris, sensors)))
+        {
+            eprintln!("skipping {tris} triangles × {sensors} sensors (--max-… or --point)");
             continue;
         }
         let name = format!("building-{tris}-s{sensors}");
