@@ -35,7 +35,7 @@ use crate::radiosity::{Transport, TransportSensor};
 use crate::scene::Scene;
 use crate::site::solar_position::solar_position;
 use crate::sky::Sky;
-use crate::sources::{Source, SourceKey};
+use crate::sources::Source;
 use crate::trace::Tracer;
 use crate::transfer;
 use chrono::Datelike;
@@ -45,6 +45,7 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 mod notes; // what a step's report says: counts, skipped work, the largest errors
+mod sun; // the sensors' direct sun from the snapped sun's cached responses
 
 pub use super::step_types::{EngineOptions, Step, StepTime};
 
@@ -628,29 +629,6 @@ impl<'a> Engine<'a> {
             .map(|(src, d)| {
                 let res = self.dirs.quality().projection.resolution_for(src.is_sun());
                 self.mesh_memo.weights(self.scene, op, src, res, &d.record)
-            })
-            .collect()
-    }
-
-    /// Each sensor's direct sun (lux) from the sun among `sources` (none: zeros), through
-    /// `dirs`' cached sensor responses of its snapped cell, τ at the true angle.
-    fn sun_lux(&self, dirs: &Directions, sources: &[Source]) -> Vec<f64> {
-        let k = self.scene.sensors.len();
-        let Some(src) = sources.iter().find(|s| matches!(s.key, SourceKey::Sun(_))) else {
-            return vec![0.0; k];
-        };
-        let res = dirs.quality().projection.resolution_for(true);
-        let d = dirs.fetch(src, res);
-        (0..k)
-            .map(|i| {
-                let cos = self.scene.sensors[i].normal.dot(src.true_direction);
-                if cos > 0.0 {
-                    crate::photometry::lux(
-                        src.normal_irradiance * dirs.sun_transmission(i, src, &d.sensors[i]),
-                    ) * cos
-                } else {
-                    0.0
-                }
             })
             .collect()
     }
