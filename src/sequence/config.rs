@@ -101,6 +101,8 @@ impl Quality {
                 sky: SkyParams {
                     min_depth: 1,
                     max_depth: 3,
+                    ground_horizon_depth: 3,
+                    sky_horizon_depth: 3,
                     ..base.sky
                 },
                 sun_spacing_deg: 1.0,
@@ -128,7 +130,8 @@ impl Quality {
                     min_solid_angle_sr: 5e-4,
                     max_irradiance_fraction: 0.004,
                     ground_depth: 2,
-                    ground_horizon_depth: 4,
+                    ground_horizon_depth: 5,
+                    sky_horizon_depth: 5,
                     ..base.sky
                 },
                 sun_spacing_deg: 0.1,
@@ -160,7 +163,8 @@ impl Quality {
                     min_solid_angle_sr: 1e-4,
                     max_irradiance_fraction: 0.001,
                     ground_depth: 3,
-                    ground_horizon_depth: 5,
+                    ground_horizon_depth: 6,
+                    sky_horizon_depth: 6,
                     ..base.sky
                 },
                 sun_spacing_deg: 0.05,
