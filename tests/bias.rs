@@ -204,6 +204,16 @@ fn path_traced(
 /// sensor beside its wall (about 10 % per run) sharp.
 const SEEDS: u64 = 8;
 
+/// Mean over the sensors `sensors` and the runs of their `lux` and of their `lux_err`.
+fn seed_mean(runs: &[Vec<SensorValue>], sensors: std::ops::Range<usize>) -> (f64, f64) {
+    let n = (sensors.len() * runs.len()) as f64;
+    let values = || runs.iter().flat_map(|v| &v[sensors.clone()]);
+    (
+        values().map(|s| s.lux).sum::<f64>() / n,
+        values().map(|s| s.lux_err).sum::<f64>() / n,
+    )
+}
+
 #[test]
 fn ground_glow_deep_inside_matches_path_tracing() {
     let scene = deep_rooms();
@@ -220,14 +230,7 @@ fn ground_glow_deep_inside_matches_path_tracing() {
         let r = reference.iter().map(|x| x.0).sum::<f64>() / n;
         let r_se = reference.iter().map(|x| x.1 * x.1).sum::<f64>().sqrt() / n;
         // The row's mean over the sensors and the seeds, and its mean stated error.
-        let mean = |f: fn(&SensorValue) -> f64| {
-            runs.iter()
-                .flat_map(|v| &v[row.clone()])
-                .map(f)
-                .sum::<f64>()
-                / (n * SEEDS as f64)
-        };
-        let (got, stated) = (mean(|s| s.lux), mean(|s| s.lux_err));
+        let (got, stated) = seed_mean(&runs, row.clone());
         // The reference at three standard errors, daystep within its own stated error
         // (noise of the lines, mesh discretisation, iteration; a mean of seeds is, if
         // anything, closer than one run).
@@ -247,8 +250,7 @@ fn ground_glow_deep_inside_matches_path_tracing() {
     // each with three standard errors of the reference.
     let k = 3 * GROUPS.len();
     let (r, r_se) = path_traced(&scene, GROUND, k..k + 1, BESIDE_WALL_PATHS)[0];
-    let got = runs.iter().map(|v| v[k].lux).sum::<f64>() / SEEDS as f64;
-    let stated = runs.iter().map(|v| v[k].lux_err).sum::<f64>() / SEEDS as f64;
+    let (got, stated) = seed_mean(&runs, k..k + 1);
     let line = format!(
         "0.1 m from the back wall: daystep {got:.2} lx (stated ± {stated:.2}), path tracing \
          {r:.2} ± {r_se:.3} lx, difference {:+.1} %",
