@@ -223,3 +223,79 @@ fn daylight_coefficients_equal_forward_solves_within_their_stated_errors() {
         "{all_covered}/{all_n}"
     );
 }
+
+#[test]
+fn steps_summed_together_equal_steps_summed_alone() {
+    // A day's steps by daylight coefficients in one call, in two orders, and one at a
+    // time: each node's rows are read once for all the steps that use them, and a step's
+    // values must not depend on which steps share its call (bit for bit).
+    let d = tempfile::tempdir().unwrap();
+    let scene = office(d.path(), 11);
+    let weather =
+        read_weather(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office/weather.epw"))
+            .unwrap();
+    let q = Quality::preset("draft").unwrap();
+    let day = days(&weather.records)[3];
+    let steps: Vec<(StepTime, SkySpec)> = weather
+        .records
+        .iter()
+        .filter(|r| r.time.date() == day && r.dhi > 0.0)
+        .map(|r| {
+            let at = StepTime {
+                utc: r.utc(&scene.site),
+                local: r.time,
+            };
+            let spec = SkySpec::Perez {
+                dni: r.dni,
+                dhi: r.dhi,
+                dew_point_c: r.dew_point_c,
+            };
+            (at, spec)
+        })
+        .filter(|(at, _)| solar_position(at.utc, &scene.site).altitude_deg() > 0.0)
+        .collect();
+    assert!(steps.len() >= 6, "a sunny day has daylight steps");
+    let store = Store::disabled();
+    let opts = EngineOptions {
+        surfaces: false,
+        max_memory_bytes: 0,
+        defer_operator: false,
+        mesh_solution: false,
+        values_only: false,
+    };
+    let mut dc = Engine::new(&scene, &q, &store, &opts);
+    assert!(dc.prepare(&steps).unwrap());
+    let skies: Vec<Sky> = steps
+        .iter()
+        .map(|(at, spec)| {
+            let sun = solar_position(at.utc, &scene.site);
+            build_sky(spec, &sun, at.local.ordinal(), scene.ground_reflectance).unwrap()
+        })
+        .collect();
+    let bits = |s: &daystep::sequence::Step| -> Vec<(u64, u64)> {
+        s.sensors
+            .iter()
+            .map(|v| (v.lux.to_bits(), v.lux_err.to_bits()))
+            .collect()
+    };
+    let together = |order: &[usize]| -> Vec<Vec<(u64, u64)>> {
+        let batch = order
+            .iter()
+            .map(|&i| (&skies[i], dc.cut(&skies[i], false), Report::default()))
+            .collect();
+        let mut out = vec![Vec::new(); skies.len()];
+        for (&i, s) in order.iter().zip(dc.steps_by_coefficients(batch)) {
+            out[i] = bits(&s);
+        }
+        out
+    };
+    let forward: Vec<usize> = (0..skies.len()).collect();
+    let backward: Vec<usize> = forward.iter().rev().copied().collect();
+    let alone: Vec<Vec<(u64, u64)>> = forward.iter().map(|&i| together(&[i])[i].clone()).collect();
+    assert_eq!(together(&forward), alone);
+    assert_eq!(together(&backward), alone);
+    assert!(alone
+        .iter()
+        .flatten()
+        .any(|(lux, _)| f64::from_bits(*lux) > 100.0));
+}

@@ -7,7 +7,7 @@ mod annual; // annual runs: resume after Ctrl-C and a cut line, shards merged (a
 mod bias; // ground glow deep inside (behind a door) against an independent path tracer
 mod cache; // projection cache: round trips, bad files rebuilt, eviction, concurrent writers (nothing lost or duplicated), CLI
 mod cache_runs; // the cache in whole runs: warm = cold, Kd/site/weather hit, vertex misses, damage, 4 processes
-mod coefficients; // daylight coefficients against forward solves: sky part, sun interpolation, coverage
+mod coefficients; // daylight coefficients against forward solves: sky part, sun interpolation, coverage; steps summed together = alone
 mod coincident; // coincident faces: floor on ground, desk on floor, walls back to back
 mod cli; // the binary end to end: exit codes, messages naming file:line, outputs
 mod df; // daylight factor: 100 % in the open, the vertical formula, roof-opening sky component, CLI

@@ -6,8 +6,9 @@
 use super::config::SkySpec;
 use super::path_pass::{PathValues, Paths};
 use super::report::{Report, StageTimes};
-use super::sky::sources_for;
+use super::sky::{sources_for, SkySources};
 use super::step::{Engine, StepTime};
+use super::step_types::Step;
 use crate::error::{Error, Result};
 use crate::radiosity::TransportState;
 use crate::scene::Scene;
@@ -99,6 +100,9 @@ impl Ctx<'_> {
     /// One day's steps: independent (in parallel) with daylight coefficients, otherwise a
     /// chain warm-started from the day's first lit step.
     pub fn run_day(&self, day: &[Planned]) -> Result<Vec<StepOut>> {
+        if self.engine.steps_are_independent() && self.paths.is_none() {
+            return self.sum_day(day);
+        }
         if self.engine.steps_are_independent() {
             return day
                 .par_iter()
@@ -109,22 +113,92 @@ impl Ctx<'_> {
         day.iter().map(|s| self.run_step(s, &mut state)).collect()
     }
 
-    fn run_step(&self, s: &Planned, state: &mut Option<TransportState>) -> Result<StepOut> {
+    /// A day's steps by daylight coefficients: the skies and cuts in parallel, then the
+    /// sums of all the day's lit steps at once ([`Engine::steps_by_coefficients`]), which
+    /// read each node's coefficients once for the day.
+    fn sum_day(&self, day: &[Planned]) -> Result<Vec<StepOut>> {
+        let begun: Vec<Option<(Sky, Report, SkySources)>> = day
+            .par_iter()
+            .map(|s| {
+                if !matches!(classify(self.scene, s.record), Kind::Day { .. }) {
+                    return Ok(None);
+                }
+                let at = step_time(self.scene, s.record);
+                let (sky, mut report) = self.sky(s, &at, &perez(s.record))?;
+                let cut = report
+                    .stage_seconds
+                    .time("sources", || self.engine.cut(&sky, false));
+                Ok(Some((sky, report, cut)))
+            })
+            .collect::<Result<_>>()?;
+        let dark: Vec<bool> = begun.iter().map(Option::is_none).collect();
+        let (skies, rest): (Vec<Sky>, Vec<(SkySources, Report)>) = begun
+            .into_iter()
+            .flatten()
+            .map(|(sky, report, cut)| (sky, (cut, report)))
+            .unzip();
+        let lit = skies
+            .iter()
+            .zip(rest)
+            .map(|(sky, (cut, report))| (sky, cut, report))
+            .collect();
+        let mut steps = self.engine.steps_by_coefficients(lit).into_iter();
+        Ok(dark
+            .into_iter()
+            .map(|dark| match dark {
+                true => self.dark(),
+                false => self.step_out(steps.next().expect("a step per lit record"), None, None),
+            })
+            .collect())
+    }
+
+    /// The zeros of a step without daylight.
+    fn dark(&self) -> StepOut {
         let n = self.scene.sensors.len();
+        StepOut {
+            total: vec![0.0; n],
+            sun: vec![0.0; n],
+            surfaces: vec![0.0; self.engine.surfaces().map_or(0, |m| m.columns())],
+            ..StepOut::default()
+        }
+    }
+
+    /// What the run keeps of a computed step (its stage times merged into the run's).
+    fn step_out(
+        &self,
+        step: Step,
+        paths: Option<PathValues>,
+        path_cut: Option<Vec<Source>>,
+    ) -> StepOut {
+        self.stages
+            .lock()
+            .expect("stages lock")
+            .merge(&step.report.stage_seconds);
+        StepOut {
+            total: step.sensors.iter().map(|v| v.lux).collect(),
+            sun: step.sensors.iter().map(|v| v.lux_sun).collect(),
+            surfaces: step.surfaces,
+            rel_err: step
+                .sensors
+                .iter()
+                .filter_map(|v| v.relative_error(10.0).map(|e| e as f32))
+                .collect(),
+            sweeps: step.report.transport_solve.map_or(0, |t| t.sweeps),
+            paths,
+            path_cut,
+        }
+    }
+
+    fn run_step(&self, s: &Planned, state: &mut Option<TransportState>) -> Result<StepOut> {
         if !matches!(classify(self.scene, s.record), Kind::Day { .. }) {
-            return Ok(StepOut {
-                total: vec![0.0; n],
-                sun: vec![0.0; n],
-                surfaces: vec![0.0; self.engine.surfaces().map_or(0, |m| m.columns())],
-                ..StepOut::default()
-            });
+            return Ok(self.dark());
         }
         let r = s.record;
         let at = step_time(self.scene, s.record);
         let spec = perez(r);
         let (sky, mut report) = self.sky(s, &at, &spec)?;
         let (mut paths, mut path_cut) = (None, None);
-        let step = match self.paths {
+        let mut step = match self.paths {
             None => self
                 .engine
                 .step_sky(&sky, state.as_ref(), false, report, spec.irradiance()),
@@ -153,26 +227,10 @@ impl Ctx<'_> {
                 step
             }
         };
-        self.stages
-            .lock()
-            .expect("stages lock")
-            .merge(&step.report.stage_seconds);
         if step.state.is_some() {
-            *state = step.state;
+            *state = step.state.take();
         }
-        Ok(StepOut {
-            total: step.sensors.iter().map(|v| v.lux).collect(),
-            sun: step.sensors.iter().map(|v| v.lux_sun).collect(),
-            surfaces: step.surfaces,
-            rel_err: step
-                .sensors
-                .iter()
-                .filter_map(|v| v.relative_error(10.0).map(|e| e as f32))
-                .collect(),
-            sweeps: step.report.transport_solve.map_or(0, |t| t.sweeps),
-            paths,
-            path_cut,
-        })
+        Ok(self.step_out(step, paths, path_cut))
     }
 
     /// The step's sky and begun report ([`Engine::sky`]), its error naming the record.

@@ -122,7 +122,12 @@ struct NodeData {
 
 #[path = "cut_batch.rs"]
 mod cut_batch;
+#[path = "ground_sum.rs"]
+mod ground_sum;
+#[path = "coefficient_sums.rs"]
+mod sums;
 pub(super) use cut_batch::CutBatch;
+use sums::axpy;
 
 /// What preparing the coefficients did (`report.json`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -161,8 +166,22 @@ pub struct Coefficients {
     nodes: HashMap<SourceKey, NodeData, ahash::RandomState>,
     /// Coarser level's nodes: 4 rows of child responses.
     coarse: Mutex<HashMap<SourceKey, std::sync::Arc<Vec<f32>>, ahash::RandomState>>,
+    /// The uniform ground's nodes summed, per ground cut.
+    ground: ground_sum::GroundMemo,
     /// Preparation counters.
     pub stats: CoefficientStats,
+}
+
+/// One step's cuts and direct sun, for [`Coefficients::evaluate`].
+pub(super) struct StepCuts<'a> {
+    /// The step's sources at the run's quality.
+    pub fine: &'a [Source],
+    /// ... and one level coarser (the error estimate's).
+    pub coarse: &'a [Source],
+    /// Each sensor's direct sun at the run's quality, lux.
+    pub sun_fine: &'a [f64],
+    /// Each sensor's direct sun one level coarser, lux.
+    pub sun_coarse: &'a [f64],
 }
 
 /// The grey value of a grey RGB quantity.
@@ -368,87 +387,135 @@ impl Coefficients {
             grid,
             nodes,
             coarse: Mutex::new(HashMap::default()),
+            ground: Default::default(),
             stats,
         };
         Ok((c, skies))
     }
 
-    /// One step's sensor values from the coefficients: `fine` and `coarse` the step's
-    /// sources at the run's quality and one level coarser, `sun_fine` / `sun_coarse` each
-    /// sensor's direct sun (lux) at both levels, `coarse_dirs` the coarser level's
-    /// directions (sensor responses only), `iteration_rel` the solves' tolerance. Returns
-    /// the values (with the sun's interpolation error in `lux_err`) and that error, lux.
+    /// Sensor values of `steps` from the coefficients, with `coarse_dirs` the coarser
+    /// level's directions (sensor responses only) and `iteration_rel` the solves'
+    /// tolerance. Returns per step the values (with the sun's interpolation error in
+    /// `lux_err`) and that error, lux. Node by node: each node's rows are read once for
+    /// every step that uses it (read once per step, hundreds of kilobytes a step, they
+    /// kept the sums waiting on memory). Each step sums its nodes in key order, so its
+    /// values do not depend on which steps share the call.
     pub(super) fn evaluate(
         &self,
-        fine: &[Source],
-        coarse: &[Source],
-        sun_fine: &[f64],
-        sun_coarse: &[f64],
+        steps: &[StepCuts],
         coarse_dirs: &Directions,
         iteration_rel: f64,
-    ) -> (Vec<SensorValue>, Vec<f64>) {
+    ) -> Vec<(Vec<SensorValue>, Vec<f64>)> {
         let k = self.sensors;
         let p = self.parts;
-        // Accumulators: sky, Σ L̂ × response sum, uncertainty, parts, coarse mesh.
-        let mut acc = vec![0f32; (3 + p + 1) * k];
-        let mut interp = vec![0f64; k];
-        for src in fine {
-            match src.key {
-                SourceKey::Sun(_) => {
-                    self.add_sun(src, &mut acc[3 * k..], Some(&mut interp));
-                }
-                _ => {
-                    let nd = self.node(src);
-                    let l: [f32; 4] = src.child_radiance.map(g);
-                    let ln = g(src.radiance);
+        // Per step, accumulators: sky, Σ L̂ × response sum, uncertainty, parts, coarse
+        // mesh; then the coarser level's direct sky; and the sun's interpolation error.
+        let w = (3 + p + 1) * k;
+        let mut acc = vec![0f32; steps.len() * w];
+        let mut csky = vec![0f32; steps.len() * k];
+        let mut interp = vec![0f64; steps.len() * k];
+        let mut fine_uses: Vec<(SourceKey, usize, &Source)> = Vec::new();
+        let mut coarse_uses: Vec<(SourceKey, usize, &Source)> = Vec::new();
+        for (j, st) in steps.iter().enumerate() {
+            let acc = &mut acc[j * w..(j + 1) * w];
+            // The ground glow, uniform, as one source ([`ground_sum`]); node by node
+            // otherwise.
+            let (ground, rest) = ground_sum::split_ground(st.fine);
+            match ground_sum::uniform_radiance(&ground) {
+                Some(l) => {
+                    let gs = self.ground_sum(&ground);
                     let (sky, rest) = acc.split_at_mut(k);
                     let (refsum, rest) = rest.split_at_mut(k);
                     let (unc, ind) = rest.split_at_mut(k);
-                    let d = &nd.direct;
-                    for c in 0..4 {
-                        axpy(sky, l[c], &d[c * k..(c + 1) * k]);
-                        axpy(unc, l[c], &d[(5 + c) * k..(6 + c) * k]);
-                    }
-                    axpy(refsum, ln, &d[4 * k..5 * k]);
-                    let e = g(src.normal_irradiance);
-                    axpy(ind, e, &nd.indirect);
+                    axpy(sky, l, &gs.direct);
+                    axpy(refsum, l, &gs.direct);
+                    axpy(unc, l, &gs.uncertainty);
+                    axpy(ind, l, &gs.indirect);
+                }
+                None => fine_uses.extend(ground.iter().map(|s| (s.key, j, *s))),
+            }
+            for src in rest {
+                if src.is_sun() {
+                    let interp = &mut interp[j * k..(j + 1) * k];
+                    self.add_sun(src, &mut acc[3 * k..], Some(interp));
+                } else {
+                    fine_uses.push((src.key, j, src));
+                }
+            }
+            let (cground, crest) = ground_sum::split_ground(st.coarse);
+            match ground_sum::uniform_radiance(&cground) {
+                Some(l) => {
+                    let d = self.coarse_ground_sum(&cground, |s| self.coarse_node(s, coarse_dirs));
+                    axpy(&mut csky[j * k..(j + 1) * k], l, &d);
+                }
+                None => coarse_uses.extend(cground.iter().map(|s| (s.key, j, *s))),
+            }
+            coarse_uses.extend(crest.iter().filter(|s| !s.is_sun()).map(|s| (s.key, j, *s)));
+        }
+        fine_uses.sort_unstable_by_key(|u| (u.0, u.1));
+        for uses in fine_uses.chunk_by(|a, b| a.0 == b.0) {
+            let nd = self.node(uses[0].2);
+            for &(_, j, src) in uses {
+                let weights = sums::Weights {
+                    children: src.child_radiance.map(g),
+                    node: g(src.radiance),
+                    irradiance: g(src.normal_irradiance),
+                };
+                sums::add_node(
+                    &mut acc[j * w..(j + 1) * w],
+                    k,
+                    &nd.direct,
+                    &nd.indirect,
+                    weights,
+                );
+            }
+        }
+        coarse_uses.sort_unstable_by_key(|u| (u.0, u.1));
+        for uses in coarse_uses.chunk_by(|a, b| a.0 == b.0) {
+            let d = self.coarse_node(uses[0].2, coarse_dirs);
+            for &(_, j, src) in uses {
+                let csky = &mut csky[j * k..(j + 1) * k];
+                for c in 0..4 {
+                    axpy(csky, g(src.child_radiance[c]), &d[c * k..(c + 1) * k]);
                 }
             }
         }
-        // The coarser level's direct sky.
-        let mut csky = vec![0f32; k];
-        for src in coarse.iter().filter(|s| !s.is_sun()) {
-            let d = self.coarse_node(src, coarse_dirs);
-            for c in 0..4 {
-                axpy(&mut csky, g(src.child_radiance[c]), &d[c * k..(c + 1) * k]);
-            }
-        }
-        let values = (0..k)
-            .map(|s| {
-                let sky = acc[s] as f64;
-                let fine = SensorDirect {
-                    sun: from_lux(sun_fine[s]),
-                    sky: from_lux(sky),
-                    rays: 0,
-                    visibility_err_lux: acc[2 * k + s] as f64,
-                    radiance_error: from_lux(sky - acc[k + s] as f64),
-                };
-                let coarse = SensorDirect {
-                    sun: from_lux(sun_coarse[s]),
-                    sky: from_lux(csky[s] as f64),
-                    ..SensorDirect::default()
-                };
-                let parts: Vec<Rgb> = (0..p)
-                    .map(|q| from_lux(acc[(3 + q) * k + s] as f64))
+        steps
+            .iter()
+            .enumerate()
+            .map(|(j, st)| {
+                let (acc, csky) = (&acc[j * w..(j + 1) * w], &csky[j * k..(j + 1) * k]);
+                let interp = interp[j * k..(j + 1) * k].to_vec();
+                let values = (0..k)
+                    .map(|s| {
+                        let sky = acc[s] as f64;
+                        let fine = SensorDirect {
+                            sun: from_lux(st.sun_fine[s]),
+                            sky: from_lux(sky),
+                            rays: 0,
+                            visibility_err_lux: acc[2 * k + s] as f64,
+                            radiance_error: from_lux(sky - acc[k + s] as f64),
+                        };
+                        let coarse = SensorDirect {
+                            sun: from_lux(st.sun_coarse[s]),
+                            sky: from_lux(csky[s] as f64),
+                            ..SensorDirect::default()
+                        };
+                        let parts: Vec<Rgb> = (0..p)
+                            .map(|q| from_lux(acc[(3 + q) * k + s] as f64))
+                            .collect();
+                        let ind = TransportSensor::from_parts(
+                            &parts,
+                            from_lux(acc[(3 + p) * k + s] as f64),
+                        );
+                        let mut v = SensorValue::estimate(&fine, &coarse, &ind, iteration_rel);
+                        v.lux_err += interp[s];
+                        v
+                    })
                     .collect();
-                let ind =
-                    TransportSensor::from_parts(&parts, from_lux(acc[(3 + p) * k + s] as f64));
-                let mut v = SensorValue::estimate(&fine, &coarse, &ind, iteration_rel);
-                v.lux_err += interp[s];
-                v
+                (values, interp)
             })
-            .collect();
-        (values, interp)
+            .collect()
     }
 
     /// Adds the sun's interreflected light, interpolated on the grid, to `ind` (the rows
@@ -505,16 +572,6 @@ impl Coefficients {
             .entry(src.key)
             .or_insert(d)
             .clone()
-    }
-}
-
-/// y += a·x (f32 lanes: the per-step cost).
-fn axpy(y: &mut [f32], a: f32, x: &[f32]) {
-    if a == 0.0 {
-        return;
-    }
-    for (y, x) in y.iter_mut().zip(x) {
-        *y += a * *x;
     }
 }
 

@@ -45,6 +45,7 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 mod notes; // what a step's report says: counts, skipped work, the largest errors
+mod by_coefficients; // stages 3–7 of several steps at once by daylight coefficients
 mod sun; // the sensors' direct sun from the snapped sun's cached responses
 
 pub use super::step_types::{EngineOptions, Step, StepTime};
@@ -446,52 +447,19 @@ impl<'a> Engine<'a> {
         mut report: Report,
         dni_dhi: Option<(f64, f64)>,
     ) -> Step {
+        if self.coefficients.is_some() && !detail {
+            // 3–7 by daylight coefficients.
+            let s = SkySources {
+                sources: s.sources.clone(),
+                coarse: s.coarse.clone(),
+                ..*s
+            };
+            let mut one = self.steps_by_coefficients(vec![(sky, s, report)]);
+            return one.pop().expect("one step");
+        }
         let mut times = std::mem::take(&mut report.stage_seconds);
         self.note_sources(s, &mut report);
         let sources = s.sources.clone();
-        if let (Some((c, sun_dirs)), false) = (&self.coefficients, detail) {
-            // 3–7 by daylight coefficients: sums over the cut, no projection, no solve.
-            let (sensors, interp) = times.time("coefficients", || {
-                let sun_fine = self.sun_lux(sun_dirs, &sources);
-                if self.opts.values_only {
-                    let batch = CutBatch::new(&[&sources]);
-                    let mut v = c.evaluate_values_batch(&batch, &[sun_fine]);
-                    return (v.pop().expect("one step"), Vec::new());
-                }
-                let made;
-                let coarse = match &s.coarse {
-                    Some(c) => c,
-                    None => {
-                        made = sources_for(sky, self.coarse.quality()).sources;
-                        &made
-                    }
-                };
-                let sun_coarse = self.sun_lux(&self.coarse, coarse);
-                c.evaluate(
-                    &sources,
-                    coarse,
-                    &sun_fine,
-                    &sun_coarse,
-                    &self.coarse,
-                    self.dirs.quality().transport.tolerance,
-                )
-            });
-            report.error_model = ERROR_MODEL.into();
-            note_errors(&sensors, &mut report);
-            report.warnings.extend(sky.warnings.iter().cloned());
-            report.stage_seconds = times;
-            return Step {
-                sensors,
-                state: None,
-                surfaces: Vec::new(),
-                sky: None,
-                sources,
-                elements: None,
-                sun_interpolation_err: interp,
-                mesh_direct: Vec::new(),
-                report,
-            };
-        }
         // 3. Directions: projections and sensor responses, cached.
         let data = times.time("directions", || self.dirs.get_all(&sources));
         let records: Vec<&DirectionRecord> = data.iter().map(|d| &d.record).collect();

@@ -164,13 +164,17 @@ pub fn sky_sources_levels(sky: &Sky, levels: &[SkyParams]) -> Vec<SkySources> {
     assert!(levels.len() <= 8, "at most 8 levels in one walk");
     let mut out = vec![SkySources::default(); levels.len()];
     // Reference energy: ∫L dω over the sky at depth 2 (cheap, and only sets thresholds).
+    // The walk below visits these nodes again and takes their radiance from here.
     let mut reference = 0.0;
+    let mut depth2 = Vec::with_capacity(64);
     for b in 0..4u8 {
         for k1 in 0..4 {
             for k2 in 0..4 {
                 let key = SkyNodeKey::root(b).child(k1).child(k2);
                 let g = geometry(key, &key.vertices());
-                reference += grey(node_radiance(sky, key, &g).0 * g.solid_angle);
+                let r = node_radiance(sky, key, &g);
+                reference += grey(r.0 * g.solid_angle);
+                depth2.push((key, r));
             }
         }
     }
@@ -189,18 +193,32 @@ pub fn sky_sources_levels(sky: &Sky, levels: &[SkyParams]) -> Vec<SkySources> {
         .map(|b| (SkyNodeKey::root(b), SkyNodeKey::root(b).vertices(), all))
         .collect();
     while let Some((key, v, active)) = stack.pop() {
-        let g = geometry(key, &v);
-        let (l, variation, children) = node_radiance(sky, key, &g);
-        let omega = g.solid_angle;
         let depth = key.depth();
+        // A sky node every active cut splits by depth alone needs no radiance (a fifth
+        // of a warm annual run's sky arithmetic went there).
+        let by_depth = |p: &SkyParams| {
+            depth < p.min_depth || (depth < p.sky_horizon_depth && touches_horizon(&v))
+        };
+        if key.is_sky() && (0..levels.len()).all(|i| active & (1 << i) == 0 || by_depth(&levels[i]))
+        {
+            for k in (0..4).rev() {
+                stack.push((key.child(k), child_vertices(key, &v, k), active));
+            }
+            continue;
+        }
+        let g = geometry(key, &v);
+        let (l, variation, children) = match depth2.iter().find(|(k, _)| *k == key) {
+            Some((_, r)) => *r,
+            None => node_radiance(sky, key, &g),
+        };
+        let omega = g.solid_angle;
         let mut splitting = 0u8;
         for (i, params) in levels.iter().enumerate() {
             if active & (1 << i) == 0 {
                 continue;
             }
             let split = if key.is_sky() {
-                depth < params.min_depth
-                    || (depth < params.sky_horizon_depth && touches_horizon(&v))
+                by_depth(params)
                     || (depth < params.max_depth
                         && omega > params.min_solid_angle_sr
                         && (grey(l) * omega > params.max_irradiance_fraction * reference

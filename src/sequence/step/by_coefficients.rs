@@ -1,0 +1,96 @@
+//! Stages 3–7 of steps by daylight coefficients ([`super::Engine`]): sums over each
+//! step's cut, no projection, no solve; several steps at once, so that each node's
+//! coefficients are read once for all of them.
+
+use super::super::coefficients::{CutBatch, StepCuts};
+use super::super::estimate::ERROR_MODEL;
+use super::super::report::Report;
+use super::super::sky::{sources_for, SkySources};
+use super::super::step_types::Step;
+use super::notes::note_errors;
+use super::Engine;
+use crate::sky::Sky;
+use std::time::Instant;
+
+impl Engine<'_> {
+    /// Stages 3–7 of `steps` by daylight coefficients, each step its sky, its cut at
+    /// this engine's quality ([`Engine::cut`]) and its begun report. The same values,
+    /// to the bit, as one step at a time. Each step's report carries an equal share of
+    /// the sums' time (stage `coefficients`).
+    ///
+    /// # Panics
+    /// When this engine has no daylight coefficients ([`Engine::steps_are_independent`]).
+    pub fn steps_by_coefficients(&self, steps: Vec<(&Sky, SkySources, Report)>) -> Vec<Step> {
+        let (c, sun_dirs) = self
+            .coefficients
+            .as_ref()
+            .expect("steps by daylight coefficients need coefficients");
+        let t0 = Instant::now();
+        let sun_fine: Vec<Vec<f64>> = steps
+            .iter()
+            .map(|(_, s, _)| self.sun_lux(sun_dirs, &s.sources))
+            .collect();
+        let values: Vec<_> = if self.opts.values_only {
+            let cuts: Vec<&[_]> = steps.iter().map(|(_, s, _)| &s.sources[..]).collect();
+            let batch = CutBatch::new(&cuts);
+            c.evaluate_values_batch(&batch, &sun_fine)
+                .into_iter()
+                .map(|v| (v, Vec::new()))
+                .collect()
+        } else {
+            let made: Vec<Option<Vec<_>>> = steps
+                .iter()
+                .map(|(sky, s, _)| {
+                    s.coarse
+                        .is_none()
+                        .then(|| sources_for(sky, self.coarse.quality()).sources)
+                })
+                .collect();
+            let coarse: Vec<&[_]> = steps
+                .iter()
+                .zip(&made)
+                .map(|((_, s, _), m)| m.as_deref().or(s.coarse.as_deref()).expect("a coarse cut"))
+                .collect();
+            let sun_coarse: Vec<Vec<f64>> = coarse
+                .iter()
+                .map(|c| self.sun_lux(&self.coarse, c))
+                .collect();
+            let cuts: Vec<StepCuts> = steps
+                .iter()
+                .enumerate()
+                .map(|(j, (_, s, _))| StepCuts {
+                    fine: &s.sources,
+                    coarse: coarse[j],
+                    sun_fine: &sun_fine[j],
+                    sun_coarse: &sun_coarse[j],
+                })
+                .collect();
+            c.evaluate(&cuts, &self.coarse, self.dirs.quality().transport.tolerance)
+        };
+        let share = t0.elapsed().as_secs_f64() / steps.len().max(1) as f64;
+        steps
+            .into_iter()
+            .zip(values)
+            .map(|((sky, s, mut report), (sensors, interp))| {
+                let mut times = std::mem::take(&mut report.stage_seconds);
+                times.add("coefficients", share);
+                self.note_sources(&s, &mut report);
+                report.error_model = ERROR_MODEL.into();
+                note_errors(&sensors, &mut report);
+                report.warnings.extend(sky.warnings.iter().cloned());
+                report.stage_seconds = times;
+                Step {
+                    sensors,
+                    state: None,
+                    surfaces: Vec::new(),
+                    sky: None,
+                    sources: s.sources,
+                    elements: None,
+                    sun_interpolation_err: interp,
+                    mesh_direct: Vec::new(),
+                    report,
+                }
+            })
+            .collect()
+    }
+}
