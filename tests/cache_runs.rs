@@ -294,18 +294,77 @@ fn a_warm_annual_run_reads_its_cuts_and_a_short_record_is_made_again() {
         let out = d.path().join(name);
         let r = run_annual(&scene, &weather, &q, &store, &out, &opts, &control).unwrap();
         let ill = std::fs::read(out.join("illuminance.csv")).unwrap();
-        (
-            r.coefficients
-                .expect("annual by coefficients")
-                .cuts_from_cache,
-            ill,
-        )
+        let c = r.coefficients.expect("annual by coefficients");
+        (c.cuts_from_cache, ill, c.cut_days_from_cache)
     };
-    let (cold_cached, cold) = run("cold");
+    let (cold_cached, cold, cold_days) = run("cold");
     assert!(!cold_cached, "an empty cache holds no cuts");
-    let (warm_cached, warm) = run("warm");
+    assert_eq!(cold_days, 0, "nor a day's cuts");
+    let (warm_cached, warm, warm_days) = run("warm");
     assert!(warm_cached, "the second run reads the cuts");
+    assert_eq!(warm_days, 1, "and the day's cuts");
     assert_eq!(warm, cold, "the same bytes from the cached cuts");
+
+    // The day's cuts record rewritten, valid in every byte, with every node's radiance 1 %
+    // higher: the day's sky disagrees, so the record is made again.
+    let record_of = |kind: u8| {
+        std::fs::read_dir(d.path().join("cache"))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .find(|p| {
+                std::fs::read(p)
+                    .ok()
+                    .is_some_and(|b| cache::Record::parse(&b).is_ok_and(|r| r.key().kind == kind))
+            })
+            .expect("a record of the kind")
+    };
+    let day = record_of(cache::KIND_DAY_CUTS);
+    let bytes = std::fs::read(&day).unwrap();
+    let r = cache::Record::parse(&bytes).unwrap();
+    // The sections as `sequence::day_cuts` writes them: heads, ids, node radiances, suns,
+    // snapping angles, ground lists, their lengths, ground radiances.
+    assert_eq!(
+        r.sections().len(),
+        8,
+        "the day record's layout changed: update this test"
+    );
+    let t = |i: u32| cache::FIRST_USER_TAG + i;
+    let up: Vec<[f32; 5]> = r
+        .section::<[f32; 5]>(t(2))
+        .unwrap()
+        .iter()
+        .map(|n| n.map(|x| x * 1.01))
+        .collect();
+    let ground_up: Vec<f32> = r
+        .section::<f32>(t(7))
+        .unwrap()
+        .iter()
+        .map(|x| x * 1.01)
+        .collect();
+    assert!(!up.is_empty() && !ground_up.is_empty());
+    let forged = cache::encode(
+        &r.key(),
+        &[
+            cache::Section::of(t(0), r.section::<[u64; 6]>(t(0)).unwrap()),
+            cache::Section::of(t(1), r.section::<u64>(t(1)).unwrap()),
+            cache::Section::of(t(2), &up),
+            cache::Section::of(t(3), r.section::<[u64; 9]>(t(3)).unwrap()),
+            cache::Section::of(t(4), r.section::<f64>(t(4)).unwrap()),
+            cache::Section::of(t(5), r.section::<u64>(t(5)).unwrap()),
+            cache::Section::of(t(6), r.section::<u64>(t(6)).unwrap()),
+            cache::Section::of(t(7), &ground_up),
+        ],
+    );
+    std::fs::write(&day, forged).unwrap();
+    let (_, again, forged_days) = run("forged");
+    assert_eq!(
+        forged_days, 0,
+        "a day's cuts that disagree with its sky are not trusted"
+    );
+    assert_eq!(again, cold);
+    let (_, again, rewritten_days) = run("rewritten");
+    assert_eq!(rewritten_days, 1, "and the record is made again");
+    assert_eq!(again, cold);
 
     // Rewrite the cuts record, valid in every byte, with its first node only.
     let cuts = std::fs::read_dir(d.path().join("cache"))
@@ -327,7 +386,7 @@ fn a_warm_annual_run_reads_its_cuts_and_a_short_record_is_made_again() {
         cache::encode(&key, &[cache::Section::of(tag, &first)]),
     )
     .unwrap();
-    let (short_cached, again) = run("short");
+    let (short_cached, again, _) = run("short");
     assert!(
         !short_cached,
         "a record missing the steps' nodes is not trusted"

@@ -132,7 +132,11 @@ pub const KIND_VIEW: u8 = 6;
 /// cuts (direction 0, resolution 0; `scene` hashes the steps' times and skies, the site,
 /// the ground reflectance and the sky parameters, never the geometry).
 pub const KIND_CUTS: u8 = 7;
-// Kinds 3..=255 are free for later record types (global-line bundles, depth maps, …).
+/// Record kind: one day's sky cuts as the daylight-coefficient sums read them (direction 0,
+/// resolution 0; `scene` hashes the day's records, the site, the ground reflectance and
+/// the sky parameters of both cuts, never the geometry).
+pub const KIND_DAY_CUTS: u8 = 8;
+// Kinds 9..=255 are free for later record types (global-line bundles, depth maps, …).
 
 /// Lossless 64-bit id of a sun-grid cell: spacing δ (µdeg) in the top 32 bits, the altitude
 /// band as a signed 16-bit value in the next 16, the azimuth index in the low 16.

@@ -83,7 +83,8 @@ pub struct Store {
     size_scan: Mutex<Option<std::thread::JoinHandle<(u64, u64)>>>,
 }
 
-/// Maps `file` read-only. The only `unsafe` code of daystep.
+/// Maps `file` read-only. One of the two `unsafe` places of daystep (the other calls the
+/// AVX2 build of the coefficient sums on a CPU that has AVX2).
 #[allow(unsafe_code)]
 fn map_readonly(file: &File) -> std::io::Result<Mmap> {
     // SAFETY: `Mmap::map` is unsafe because the mapped bytes could change (or vanish, if the

@@ -4,6 +4,53 @@ use super::*;
 use crate::error::input_parts;
 use chrono::TimeDelta;
 
+#[test]
+fn values_are_written_as_the_exactly_rounded_decimal() {
+    // Against the general formatting: random magnitudes and signs, decimal ties (x.xxx5,
+    // whose binary value falls either side), and the edges.
+    let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        seed
+    };
+    let mut values = vec![
+        0.0,
+        -0.0,
+        1e-9,
+        -1e-9,
+        0.0005,
+        -0.0005,
+        0.0015,
+        2.5e-4,
+        999_999.999_5,
+        1e6,
+        1e12,
+        -3.4e7,
+        123.4565,
+        0.1,
+        0.7,
+    ];
+    for _ in 0..200_000 {
+        let m = (next() % 1_000_000_000) as f64;
+        let scale = [1e-6, 1e-3, 1.0, 1e3][(next() % 4) as usize];
+        // Every other value on a decimal tie at the fourth place.
+        let tie = (next() % 2) as f64 * 5e-4;
+        let v = m * scale / 1000.0 + tie;
+        values.push(if next() % 3 == 0 { -v } else { v });
+    }
+    for v in values {
+        let f = format!("{v:.3}");
+        let want = if f == "-0.000" {
+            "0.000".to_string()
+        } else {
+            f
+        };
+        assert_eq!(format_value(v), want, "{v:e}");
+    }
+}
+
 fn t(s: &str) -> NaiveDateTime {
     NaiveDateTime::parse_from_str(s, TIME_FORMAT).unwrap()
 }

@@ -265,6 +265,8 @@ pub fn run_annual(
             days.last_mut().expect("pushed above").push(Planned {
                 record: r,
                 time: r.time,
+                // Classified below, in parallel.
+                kind: Kind::Missing,
             });
         }
     }
@@ -300,6 +302,10 @@ pub fn run_annual(
         .par_iter()
         .map(|s| classify(scene, s.record))
         .collect();
+    for (s, k) in days.iter_mut().flatten().zip(&kinds) {
+        s.kind = *k;
+    }
+    let planned: Vec<&Planned> = days.iter().flatten().collect();
     let lit: Vec<(StepTime, SkySpec)> = planned
         .iter()
         .zip(&kinds)
@@ -405,6 +411,7 @@ pub fn run_annual(
         engine: &engine,
         stages: Mutex::new(engine.setup_times().clone()),
         paths: paths.as_ref(),
+        cut_days_from_cache: Default::default(),
     };
     if let Some(p) = &paths {
         // The paths' series start at the first step: the resumed days' rows again.
@@ -514,6 +521,9 @@ pub fn run_annual(
     report.directions = engine.directions().counts();
     report.cache = store.stats();
     report.warnings.extend(store.warnings());
+    if let Some(c) = report.coefficients.as_mut() {
+        c.cut_days_from_cache = ctx.cut_days_from_cache.into_inner();
+    }
     report.stage_seconds = ctx.stages.into_inner().expect("stages lock").0;
     if !report.interrupted {
         w_total.finish()?;

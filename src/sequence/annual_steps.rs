@@ -4,11 +4,13 @@
 //! warm-started solve.
 
 use super::config::SkySpec;
+use super::day_cuts;
 use super::path_pass::{PathValues, Paths};
 use super::report::{Report, StageTimes};
 use super::sky::{sources_for, SkySources};
 use super::step::{Engine, StepTime};
 use super::step_types::Step;
+use crate::cache::RecordKey;
 use crate::error::{Error, Result};
 use crate::radiosity::TransportState;
 use crate::scene::Scene;
@@ -18,12 +20,23 @@ use crate::sources::Source;
 use crate::weather::{Weather, WeatherRecord};
 use chrono::NaiveDateTime;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
+use std::time::Instant;
 
 /// One planned timestep.
 pub(super) struct Planned<'w> {
     pub record: &'w WeatherRecord,
     pub time: NaiveDateTime,
+    /// What the record asks of the step ([`classify`]).
+    pub kind: Kind,
+}
+
+impl Planned<'_> {
+    /// Whether the step has daylight.
+    fn lit(&self) -> bool {
+        matches!(self.kind, Kind::Day { .. })
+    }
 }
 
 /// The result of one step: total and sun-only illuminance per sensor, lux.
@@ -94,6 +107,8 @@ pub(super) struct Ctx<'a> {
     pub stages: Mutex<StageTimes>,
     /// LEED's light paths, evaluated on each lit step's sky and cut.
     pub paths: Option<&'a Paths<'a>>,
+    /// Days whose cuts came from the cache ([`day_cuts`]).
+    pub cut_days_from_cache: AtomicUsize,
 }
 
 impl Ctx<'_> {
@@ -113,43 +128,111 @@ impl Ctx<'_> {
         day.iter().map(|s| self.run_step(s, &mut state)).collect()
     }
 
-    /// A day's steps by daylight coefficients: the skies and cuts in parallel, then the
-    /// sums of all the day's lit steps at once ([`Engine::steps_by_coefficients`]), which
-    /// read each node's coefficients once for the day.
+    /// A day's steps by daylight coefficients: the day's cuts from the cache, or its skies
+    /// and cuts made in parallel (and stored), then the sums of all the day's lit steps
+    /// at once ([`Engine::summed`]), which read each node's coefficients once for the day.
     fn sum_day(&self, day: &[Planned]) -> Result<Vec<StepOut>> {
-        let begun: Vec<Option<(Sky, Report, SkySources)>> = day
-            .par_iter()
-            .map(|s| {
-                if !matches!(classify(self.scene, s.record), Kind::Day { .. }) {
-                    return Ok(None);
+        let lit: Vec<bool> = day.iter().map(Planned::lit).collect();
+        let store = self.engine.store();
+        let key = store.is_enabled().then(|| {
+            let steps: Vec<Option<(StepTime, SkySpec)>> = day
+                .iter()
+                .zip(&lit)
+                .map(|(s, &l)| l.then(|| (step_time(self.scene, s.record), perez(s.record))))
+                .collect();
+            let (fine, coarse) = self.engine.cut_qualities();
+            day_cuts::record_key(self.scene, fine, coarse, &steps)
+        });
+        let t0 = Instant::now();
+        let cached = key
+            .as_ref()
+            .and_then(|k| store.get(k))
+            .and_then(|r| day_cuts::decode(&r, &lit));
+        let cuts: Vec<(SkySources, Report, Vec<String>)> = match cached {
+            Some(c) if self.day_holds(day, &c)? => {
+                self.cut_days_from_cache.fetch_add(1, Ordering::Relaxed);
+                for (s, _) in day.iter().zip(&lit).filter(|(_, l)| **l) {
+                    // Skies made for these steps by the union are not needed.
+                    self.engine
+                        .take_sky(&step_time(self.scene, s.record), &perez(s.record));
                 }
-                let at = step_time(self.scene, s.record);
-                let (sky, mut report) = self.sky(s, &at, &perez(s.record))?;
-                let cut = report
-                    .stage_seconds
-                    .time("sources", || self.engine.cut(&sky, false));
-                Ok(Some((sky, report, cut)))
-            })
-            .collect::<Result<_>>()?;
-        let dark: Vec<bool> = begun.iter().map(Option::is_none).collect();
-        let (skies, rest): (Vec<Sky>, Vec<(SkySources, Report)>) = begun
+                let share = t0.elapsed().as_secs_f64() / lit.len().max(1) as f64;
+                c.into_iter()
+                    .flatten()
+                    .map(|cut| {
+                        let mut report = Report::default();
+                        report.stage_seconds.add("sources", share);
+                        (cut, report, Vec::new())
+                    })
+                    .collect()
+            }
+            _ => self.cut_day(day, &lit, key.as_ref())?,
+        };
+        let mut steps = self.engine.summed(cuts).into_iter();
+        Ok(lit
             .into_iter()
-            .flatten()
-            .map(|(sky, report, cut)| (sky, (cut, report)))
-            .unzip();
-        let lit = skies
-            .iter()
-            .zip(rest)
-            .map(|(sky, (cut, report))| (sky, cut, report))
-            .collect();
-        let mut steps = self.engine.steps_by_coefficients(lit).into_iter();
-        Ok(dark
-            .into_iter()
-            .map(|dark| match dark {
-                true => self.dark(),
-                false => self.step_out(steps.next().expect("a step per lit record"), None, None),
+            .map(|lit| match lit {
+                false => self.dark(),
+                true => self.step_out(steps.next().expect("a step per lit record"), None, None),
             })
             .collect())
+    }
+
+    /// The cuts of a day's lit steps (`lit`) from their skies, in parallel, stored under
+    /// `key` in [`day_cuts::canonical`] form; each with its begun report and its sky's
+    /// warnings.
+    fn cut_day(
+        &self,
+        day: &[Planned],
+        lit: &[bool],
+        key: Option<&RecordKey>,
+    ) -> Result<Vec<(SkySources, Report, Vec<String>)>> {
+        let made: Vec<Option<(SkySources, Report, Vec<String>)>> = day
+            .par_iter()
+            .zip(lit)
+            .map(|(s, &lit)| {
+                if !lit {
+                    return Ok(None);
+                }
+                let (sky, report, mut cut) = self.sky_and_cut(s)?;
+                day_cuts::canonical(&mut cut);
+                Ok(Some((cut, report, sky.warnings)))
+            })
+            .collect::<Result<_>>()?;
+        if let Some(k) = key {
+            let refs: Vec<Option<&SkySources>> =
+                made.iter().map(|m| m.as_ref().map(|m| &m.0)).collect();
+            if let Some(bytes) = day_cuts::encode(k, &refs) {
+                self.engine.store().put(k, &bytes);
+            }
+        }
+        Ok(made.into_iter().flatten().collect())
+    }
+
+    /// A step's sky, begun report and cut at the engine's qualities.
+    fn sky_and_cut(&self, s: &Planned) -> Result<(Sky, Report, SkySources)> {
+        let at = step_time(self.scene, s.record);
+        let (sky, mut report) = self.sky(s, &at, &perez(s.record))?;
+        let cut = report
+            .stage_seconds
+            .time("sources", || self.engine.cut(&sky, false));
+        Ok((sky, report, cut))
+    }
+
+    /// Whether cached cuts `c` of `day` hold: one lit step's (the middle one) cut made
+    /// again must be the same, to the bit.
+    fn day_holds(&self, day: &[Planned], c: &[Option<SkySources>]) -> Result<bool> {
+        let lit: Vec<usize> = (0..day.len()).filter(|&i| c[i].is_some()).collect();
+        let Some(&i) = lit.get(lit.len() / 2) else {
+            return Ok(true);
+        };
+        let (_, _, mut cut) = self.sky_and_cut(&day[i])?;
+        day_cuts::canonical(&mut cut);
+        let held = c[i].as_ref().expect("a lit step");
+        Ok(cut.sources == held.sources
+            && cut.coarse == held.coarse
+            && cut.negligible == held.negligible
+            && cut.sun_snapping_deg == held.sun_snapping_deg)
     }
 
     /// The zeros of a step without daylight.
@@ -190,7 +273,7 @@ impl Ctx<'_> {
     }
 
     fn run_step(&self, s: &Planned, state: &mut Option<TransportState>) -> Result<StepOut> {
-        if !matches!(classify(self.scene, s.record), Kind::Day { .. }) {
+        if !s.lit() {
             return Ok(self.dark());
         }
         let r = s.record;
@@ -252,7 +335,7 @@ impl Ctx<'_> {
         let Some(p) = self.paths else {
             return Ok(None);
         };
-        if !matches!(classify(self.scene, s.record), Kind::Day { .. }) {
+        if !s.lit() {
             return Ok(None);
         }
         let at = step_time(self.scene, s.record);

@@ -135,6 +135,9 @@ pub struct CoefficientStats {
     /// Whether the union of the steps' cuts (which nodes they use) came from the cache
     /// ([`super::cuts`]) rather than from a cut of every step.
     pub cuts_from_cache: bool,
+    /// Days whose steps' cuts were read from the cache ([`super::day_cuts`]) rather than
+    /// made from their skies.
+    pub cut_days_from_cache: usize,
     /// Sky and ground nodes the run's steps use.
     pub nodes: usize,
     /// Sun-grid vertices the site's sun visits.
@@ -452,7 +455,7 @@ impl Coefficients {
             }
             coarse_uses.extend(crest.iter().filter(|s| !s.is_sun()).map(|s| (s.key, j, *s)));
         }
-        fine_uses.sort_unstable_by_key(|u| (u.0, u.1));
+        sums::sort_uses(&mut fine_uses);
         for uses in fine_uses.chunk_by(|a, b| a.0 == b.0) {
             let nd = self.node(uses[0].2);
             for &(_, j, src) in uses {
@@ -470,7 +473,7 @@ impl Coefficients {
                 );
             }
         }
-        coarse_uses.sort_unstable_by_key(|u| (u.0, u.1));
+        sums::sort_uses(&mut coarse_uses);
         for uses in coarse_uses.chunk_by(|a, b| a.0 == b.0) {
             let d = self.coarse_node(uses[0].2, coarse_dirs);
             for &(_, j, src) in uses {

@@ -3,6 +3,7 @@
 //! so each node's rows are read once for every step of the batch that uses it.
 
 use super::{g, Coefficients};
+use crate::sequence::day_cuts;
 use crate::sequence::estimate::SensorValue;
 use crate::sources::{Source, SourceKey};
 
@@ -31,7 +32,9 @@ impl CutBatch {
                     sun = Some(*src);
                 } else {
                     let l = src.child_radiance.map(g);
-                    uses.push((src.key, j as u32, l, g(src.normal_irradiance)));
+                    // L̂·ω as every sum reads it ([`day_cuts::canonical`]).
+                    let e = g(day_cuts::node_irradiance(src));
+                    uses.push((src.key, j as u32, l, e));
                 }
             }
             suns.push(sun);

@@ -174,6 +174,23 @@ fn json<T: serde::Serialize>(v: &T) -> Vec<u8> {
 fn record_key(scene: &Scene, quality: &Quality, steps: &[(StepTime, SkySpec)]) -> RecordKey {
     let mut h = blake3::Hasher::new();
     h.update(b"daystep cuts\0");
+    hash_context(&mut h, scene, quality);
+    h.update(&(steps.len() as u64).to_le_bytes());
+    for (at, spec) in steps {
+        hash_step(&mut h, at, spec);
+    }
+    RecordKey {
+        scene: SceneHash(*h.finalize().as_bytes()),
+        kind: cache::KIND_CUTS,
+        direction: 0,
+        resolution: 0,
+    }
+}
+
+/// Hashes what every step's cut at `quality` depends on besides its time and sky:
+/// [`CUTS_VERSION`], the program's version, the sky and sun parameters, the ground
+/// reflectance and the site (never the geometry).
+pub(super) fn hash_context(h: &mut blake3::Hasher, scene: &Scene, quality: &Quality) {
     h.update(&CUTS_VERSION.to_le_bytes());
     h.update(env!("CARGO_PKG_VERSION").as_bytes());
     h.update(&json(&quality.sky));
@@ -185,25 +202,20 @@ fn record_key(scene: &Scene, quality: &Quality, steps: &[(StepTime, SkySpec)]) -
         h.update(&x.to_bits().to_le_bytes());
     }
     h.update(&json(&scene.site));
-    h.update(&(steps.len() as u64).to_le_bytes());
-    for (at, spec) in steps {
-        h.update(&at.utc.timestamp().to_le_bytes());
-        h.update(&at.utc.timestamp_subsec_nanos().to_le_bytes());
-        h.update(&at.local.ordinal().to_le_bytes());
-        h.update(&at.local.num_seconds_from_midnight().to_le_bytes());
-        h.update(&json(spec));
-    }
-    RecordKey {
-        scene: SceneHash(*h.finalize().as_bytes()),
-        kind: cache::KIND_CUTS,
-        direction: 0,
-        resolution: 0,
-    }
+}
+
+/// Hashes one step's time and sky, exactly.
+pub(super) fn hash_step(h: &mut blake3::Hasher, at: &StepTime, spec: &SkySpec) {
+    h.update(&at.utc.timestamp().to_le_bytes());
+    h.update(&at.utc.timestamp_subsec_nanos().to_le_bytes());
+    h.update(&at.local.ordinal().to_le_bytes());
+    h.update(&at.local.num_seconds_from_midnight().to_le_bytes());
+    h.update(&json(spec));
 }
 
 /// A node key as three u64: kind (0 sky, 1 ground, 2 snapped sun, 3 sun-grid vertex) and
 /// its fields.
-fn encode_key(k: &SourceKey) -> [u64; 3] {
+pub(super) fn encode_key(k: &SourceKey) -> [u64; 3] {
     let sun = |kind: u64, s: SunKey| {
         [
             kind,

@@ -36,40 +36,56 @@ pub fn write_metrics(
     let mut total = export::IlluminanceRows::open(&tp)?;
     let mut sun = export::IlluminanceRows::open(&sp)?;
     let mut acc = vec![metrics::SensorAccumulator::default(); total.columns()];
-    let (mut tv, mut sv) = (Vec::new(), Vec::new());
+    let mut tv = Vec::new();
     let mut rows = 0usize;
-    loop {
-        let (t, s) = (total.next_row(&mut tv)?, sun.next_row(&mut sv)?);
-        let (Some(t), Some(s)) = (t, s) else {
-            if total.next_row(&mut tv)?.is_some() || sun.next_row(&mut sv)?.is_some() {
+    // The sun's table is parsed on a second thread, beside the total's: parsing is the
+    // work here, serial at the end of a run.
+    type SunRow = Result<Option<(String, Vec<f64>)>>;
+    std::thread::scope(|scope| -> Result<()> {
+        let (tx, rx) = std::sync::mpsc::sync_channel::<SunRow>(64);
+        scope.spawn(move || loop {
+            let mut v = Vec::new();
+            let row = sun.next_row(&mut v).map(|t| t.map(|t| (t, v)));
+            let end = !matches!(row, Ok(Some(_)));
+            if tx.send(row).is_err() || end {
+                break;
+            }
+        });
+        // After its last row the thread is gone: the table has ended.
+        let next_sun = || rx.recv().unwrap_or(Ok(None));
+        loop {
+            let (t, s) = (total.next_row(&mut tv)?, next_sun()?);
+            let (Some(t), Some((s, sv))) = (t, s) else {
+                if total.next_row(&mut tv)?.is_some() || next_sun()?.is_some() {
+                    return Err(Error::input(
+                        &sp,
+                        Some(rows + 2),
+                        None,
+                        format!("has a different number of rows from {}", tp.display()),
+                    ));
+                }
+                return Ok(());
+            };
+            rows += 1;
+            if t != s || tv.len() != sv.len() {
                 return Err(Error::input(
                     &sp,
-                    Some(rows + 2),
-                    None,
-                    format!("has a different number of rows from {}", tp.display()),
+                    Some(rows + 1),
+                    Some(&s),
+                    format!(
+                        "row {rows} differs in time or width from {}'s {t}",
+                        tp.display()
+                    ),
                 ));
             }
-            break;
-        };
-        rows += 1;
-        if t != s || tv.len() != sv.len() {
-            return Err(Error::input(
-                &sp,
-                Some(rows + 1),
-                Some(&s),
-                format!(
-                    "row {rows} differs in time or width from {}'s {t}",
-                    tp.display()
-                ),
-            ));
+            let time = parse_times(&[t])?[0];
+            let occupied = metrics::is_occupied(time, step_minutes, params);
+            // Night steps are written as 0 lx: counted dark whether flagged or not.
+            for (a, (&e, &es)) in acc.iter_mut().zip(tv.iter().zip(&sv)) {
+                a.add(e, es, occupied, true, params);
+            }
         }
-        let time = parse_times(&[t])?[0];
-        let occupied = metrics::is_occupied(time, step_minutes, params);
-        // Night steps are written as 0 lx: counted dark whether flagged or not.
-        for (a, (&e, &es)) in acc.iter_mut().zip(tv.iter().zip(&sv)) {
-            a.add(e, es, occupied, true, params);
-        }
-    }
+    })?;
     let sensors = if rows == 0 { 0 } else { acc.len() };
     let hours = step_minutes as f64 / 60.0;
     let per: Vec<metrics::SensorMetrics> = acc[..sensors].iter().map(|a| a.finish(hours)).collect();

@@ -16,6 +16,7 @@ pub mod directions;
 pub mod operator;
 pub mod direct;
 pub mod cuts;
+mod day_cuts;
 pub mod coefficients;
 pub mod estimate;
 pub mod step;

@@ -94,6 +94,16 @@ pub(super) fn geometry(key: SkyNodeKey, v: &[DVec3; 3]) -> NodeGeometry {
     }
 }
 
+/// The geometry of `key`: from the memo down to [`MEMO_DEPTH`] (no splits from the root),
+/// computed from [`SkyNodeKey::vertices`] below it; the same bits either way.
+pub(super) fn of_key(key: SkyNodeKey) -> NodeGeometry {
+    if key.depth() <= MEMO_DEPTH {
+        memo()[index(key)]
+    } else {
+        NodeGeometry::of(key, key.vertices())
+    }
+}
+
 /// The vertices of child `k` of `key` (vertices `v`), the same bits as splitting `v`.
 pub(super) fn child_vertices(key: SkyNodeKey, v: &[DVec3; 3], k: u8) -> [DVec3; 3] {
     let c = key.child(k);
@@ -117,6 +127,7 @@ mod tests {
             while let Some(key) = stack.pop() {
                 let v = key.vertices();
                 assert_eq!(geometry(key, &v), NodeGeometry::of(key, v), "{key:?}");
+                assert_eq!(of_key(key), NodeGeometry::of(key, v), "{key:?}");
                 for k in 0..4u8 {
                     let c = key.child(k);
                     assert_eq!(child_vertices(key, &v, k), c.vertices(), "{c:?}");

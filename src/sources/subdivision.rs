@@ -5,7 +5,7 @@
 //! adaptivity can produce is a node of the same fixed quadtree, so keys repeat exactly
 //! across instants. The ground glow below the horizon is uniform and gets a fixed depth.
 
-use super::node_geometry::{child_vertices, geometry, NodeGeometry};
+use super::node_geometry::{child_vertices, geometry, of_key, NodeGeometry};
 use super::{SkyNodeKey, Source, SourceKey, SunKey};
 use crate::photometry::{grey, Rgb};
 use crate::sky::Sky;
@@ -130,8 +130,7 @@ fn node_radiance(sky: &Sky, key: SkyNodeKey, g: &NodeGeometry) -> (Rgb, f64, [Rg
 /// radiance): bit-identical in those to the source a cut makes of it, since the cut's
 /// vertices are the same splits [`SkyNodeKey::vertices`] repeats.
 pub fn node_source(key: SkyNodeKey) -> Source {
-    let v = key.vertices();
-    make_source(key, &geometry(key, &v), Rgb::ZERO, [Rgb::ZERO; 4])
+    make_source(key, &of_key(key), Rgb::ZERO, [Rgb::ZERO; 4])
 }
 
 fn make_source(key: SkyNodeKey, g: &NodeGeometry, radiance: Rgb, children: [Rgb; 4]) -> Source {

@@ -3,12 +3,15 @@
 //! coefficients are read once for all of them.
 
 use super::super::coefficients::{CutBatch, StepCuts};
+use super::super::config::Quality;
+use super::super::day_cuts::canonical;
 use super::super::estimate::ERROR_MODEL;
 use super::super::report::Report;
 use super::super::sky::{sources_for, SkySources};
 use super::super::step_types::Step;
 use super::notes::note_errors;
 use super::Engine;
+use crate::cache::Store;
 use crate::sky::Sky;
 use std::time::Instant;
 
@@ -21,6 +24,40 @@ impl Engine<'_> {
     /// # Panics
     /// When this engine has no daylight coefficients ([`Engine::steps_are_independent`]).
     pub fn steps_by_coefficients(&self, steps: Vec<(&Sky, SkySources, Report)>) -> Vec<Step> {
+        let steps = steps
+            .into_iter()
+            .map(|(sky, mut s, report)| {
+                if s.coarse.is_none() && !self.opts.values_only {
+                    s.coarse = Some(sources_for(sky, self.coarse.quality()).sources);
+                }
+                (s, report, sky.warnings.clone())
+            })
+            .collect();
+        self.summed(steps)
+    }
+
+    /// The qualities of the cuts [`Self::summed`] reads: the run's, and the error
+    /// estimate's coarser one unless the engine makes values only.
+    pub(in crate::sequence) fn cut_qualities(&self) -> (&Quality, Option<&Quality>) {
+        let coarse = (!self.opts.values_only).then(|| self.coarse.quality());
+        (self.dirs.quality(), coarse)
+    }
+
+    /// The cache the engine reads and writes.
+    pub(in crate::sequence) fn store(&self) -> &Store {
+        self.store
+    }
+
+    /// [`Self::steps_by_coefficients`] for cuts that carry their coarse level (unless the
+    /// engine makes values only), each with its sky's warnings. Each cut is summed in
+    /// [`canonical`] form, as a day's cuts record holds it.
+    pub(in crate::sequence) fn summed(
+        &self,
+        mut steps: Vec<(SkySources, Report, Vec<String>)>,
+    ) -> Vec<Step> {
+        for (s, _, _) in &mut steps {
+            canonical(s);
+        }
         let (c, sun_dirs) = self
             .coefficients
             .as_ref()
@@ -28,28 +65,19 @@ impl Engine<'_> {
         let t0 = Instant::now();
         let sun_fine: Vec<Vec<f64>> = steps
             .iter()
-            .map(|(_, s, _)| self.sun_lux(sun_dirs, &s.sources))
+            .map(|(s, _, _)| self.sun_lux(sun_dirs, &s.sources))
             .collect();
         let values: Vec<_> = if self.opts.values_only {
-            let cuts: Vec<&[_]> = steps.iter().map(|(_, s, _)| &s.sources[..]).collect();
+            let cuts: Vec<&[_]> = steps.iter().map(|(s, _, _)| &s.sources[..]).collect();
             let batch = CutBatch::new(&cuts);
             c.evaluate_values_batch(&batch, &sun_fine)
                 .into_iter()
                 .map(|v| (v, Vec::new()))
                 .collect()
         } else {
-            let made: Vec<Option<Vec<_>>> = steps
-                .iter()
-                .map(|(sky, s, _)| {
-                    s.coarse
-                        .is_none()
-                        .then(|| sources_for(sky, self.coarse.quality()).sources)
-                })
-                .collect();
             let coarse: Vec<&[_]> = steps
                 .iter()
-                .zip(&made)
-                .map(|((_, s, _), m)| m.as_deref().or(s.coarse.as_deref()).expect("a coarse cut"))
+                .map(|(s, _, _)| s.coarse.as_deref().expect("a coarse cut"))
                 .collect();
             let sun_coarse: Vec<Vec<f64>> = coarse
                 .iter()
@@ -58,7 +86,7 @@ impl Engine<'_> {
             let cuts: Vec<StepCuts> = steps
                 .iter()
                 .enumerate()
-                .map(|(j, (_, s, _))| StepCuts {
+                .map(|(j, (s, _, _))| StepCuts {
                     fine: &s.sources,
                     coarse: coarse[j],
                     sun_fine: &sun_fine[j],
@@ -71,13 +99,13 @@ impl Engine<'_> {
         steps
             .into_iter()
             .zip(values)
-            .map(|((sky, s, mut report), (sensors, interp))| {
+            .map(|((s, mut report, warnings), (sensors, interp))| {
                 let mut times = std::mem::take(&mut report.stage_seconds);
                 times.add("coefficients", share);
                 self.note_sources(&s, &mut report);
                 report.error_model = ERROR_MODEL.into();
                 note_errors(&sensors, &mut report);
-                report.warnings.extend(sky.warnings.iter().cloned());
+                report.warnings.extend(warnings);
                 report.stage_seconds = times;
                 Step {
                     sensors,

@@ -14,13 +14,14 @@ impl Engine<'_> {
             return vec![0.0; k];
         };
         let res = dirs.quality().projection.resolution_for(true);
-        let d = dirs.fetch(src, res);
+        // The sensors' section only: the projection is not read.
+        let d = dirs.sensor_responses(src, res);
         (0..k)
             .map(|i| {
                 let cos = self.scene.sensors[i].normal.dot(src.true_direction);
                 if cos > 0.0 {
                     crate::photometry::lux(
-                        src.normal_irradiance * dirs.sun_transmission(i, src, &d.sensors[i]),
+                        src.normal_irradiance * dirs.sun_transmission(i, src, &d[i]),
                     ) * cos
                 } else {
                     0.0
