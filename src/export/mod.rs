@@ -82,6 +82,19 @@ pub fn push_value(s: &mut String, v: f64) {
     s.push_str(if f == "-0.000" { "0.000" } else { &f });
 }
 
+/// The value a table holds once `v` is written ([`push_value`]) and read back: the
+/// metrics of a run are taken from these without reading its tables again.
+pub fn written_value(v: f64) -> f64 {
+    let x = v * 1000.0;
+    if v != 0.0 && x.abs() < 1e9 && (x.abs().fract() - 0.5).abs() > 1e-6 {
+        // An integer over 1000: the double nearest the decimal, as parsing gives.
+        let r = x.round();
+        return if r == 0.0 { 0.0 } else { r / 1000.0 };
+    }
+    // Written "0.000" for −0: read back as +0.
+    format_value(v).parse::<f64>().unwrap_or(f64::NAN)
+}
+
 /// The `illuminance.csv` header line `time,s0,s1,…` (newline included).
 pub fn illuminance_header(sensors: usize) -> String {
     let mut s = String::from("time");

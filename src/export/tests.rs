@@ -48,6 +48,12 @@ fn values_are_written_as_the_exactly_rounded_decimal() {
             f
         };
         assert_eq!(format_value(v), want, "{v:e}");
+        let read: f64 = want.parse().unwrap();
+        assert_eq!(
+            written_value(v).to_bits(),
+            read.to_bits(),
+            "{v:e} read back"
+        );
     }
 }
 

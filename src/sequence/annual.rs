@@ -27,6 +27,7 @@ use crate::error::{Error, Result};
 use crate::export::{self, IlluminanceWriter};
 use crate::metrics::MetricParams;
 // Where callers found them before the tables moved to `merge`.
+use super::merge::MetricTables;
 pub use super::merge::{merge, write_metrics, write_report_page};
 use crate::scene::Scene;
 use crate::sources::Source;
@@ -66,12 +67,19 @@ impl Computed<'_, '_> {
         w_sun: &mut IlluminanceWriter,
         w_surf: &mut Option<IlluminanceWriter>,
         paths: Option<&Paths>,
+        tables: &mut Option<MetricTables>,
     ) -> Result<()> {
         let mut path_rows = self.path_rows.into_iter();
         for (day, outs) in self.batch.iter().zip(&self.results) {
             for (s, o) in day.iter().zip(outs) {
                 w_total.append(s.time, &o.total)?;
                 w_sun.append(s.time, &o.sun)?;
+                if let Some(t) = tables {
+                    let read = |v: &[f64]| -> Vec<f64> {
+                        v.iter().map(|&x| export::written_value(x)).collect()
+                    };
+                    t.row(s.time, &read(&o.total), &read(&o.sun));
+                }
                 if let Some(w) = w_surf {
                     w.append(s.time, &o.surfaces)?;
                 }
@@ -412,6 +420,10 @@ pub fn run_annual(
         stages: Mutex::new(engine.setup_times().clone()),
         paths: paths.as_ref(),
         cut_days_from_cache: Default::default(),
+        first_day: days
+            .get(resumed_days)
+            .and_then(|d| d.first())
+            .map(|s| s.time.date()),
     };
     if let Some(p) = &paths {
         // The paths' series start at the first step: the resumed days' rows again.
@@ -434,6 +446,10 @@ pub fn run_annual(
     // A batch's rows are written while the next batch is computed: written after it, they
     // kept the workers idle for a tenth of a warm year.
     let mut pending: Option<Computed> = None;
+    // The metrics taken from the rows as they are written, so that a run that resumed
+    // nothing does not read its tables again (a run that resumed reads them whole).
+    let mut tables = (report.resumed == 0 && n == 1)
+        .then(|| MetricTables::new(sensors, weather.interval_minutes, &opts.metrics));
     for batch in todo.chunks(days_per_batch(scene.sensors.len(), days.len())) {
         if report.interrupted || stop.load(Ordering::SeqCst) {
             report.interrupted = true;
@@ -442,7 +458,13 @@ pub fn run_annual(
         let (wrote, results) = rayon::join(
             || {
                 pending.take().map_or(Ok(()), |c| {
-                    c.write(&mut w_total, &mut w_sun, &mut w_surf, paths.as_ref())
+                    c.write(
+                        &mut w_total,
+                        &mut w_sun,
+                        &mut w_surf,
+                        paths.as_ref(),
+                        &mut tables,
+                    )
                 })
             },
             || {
@@ -485,7 +507,13 @@ pub fn run_annual(
         });
     }
     if let Some(c) = pending.take() {
-        c.write(&mut w_total, &mut w_sun, &mut w_surf, paths.as_ref())?;
+        c.write(
+            &mut w_total,
+            &mut w_sun,
+            &mut w_surf,
+            paths.as_ref(),
+            &mut tables,
+        )?;
     }
     // Step counts (the plan, so resumed runs report the same).
     for k in &kinds {
@@ -537,7 +565,10 @@ pub fn run_annual(
         let mut compliance: Option<super::compliance::Compliance> = None;
         if n == 1 {
             let tm = Instant::now();
-            let per = write_metrics(out, weather.interval_minutes, &opts.metrics)?;
+            let per = match tables {
+                Some(t) => t.write(out)?,
+                None => write_metrics(out, weather.interval_minutes, &opts.metrics)?,
+            };
             if opts.ill {
                 let (times, rows) = export::read_illuminance_csv(&out.join("illuminance.csv"))?;
                 let times = parse_times(&times)?;

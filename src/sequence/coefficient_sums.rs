@@ -79,25 +79,33 @@ fn axpy_any(y: &mut [f32], a: f32, x: &[f32]) {
     }
 }
 
-/// A sky or ground node's key as a u64 in the same order as the key (variant, face,
-/// path), when its path fits in 56 bits (depth 27; presets stop at 7).
-fn packed(k: &SourceKey) -> Option<u64> {
+/// A sky or ground node's key and a step `j` as one u64 in the order of (key, j): the
+/// variant, the face, the path in 40 bits (depth 19; presets stop at 7), then `j` in 20.
+fn packed(k: &SourceKey, j: usize) -> Option<u64> {
     let (variant, n) = match k {
         SourceKey::Sky(n) => (0u64, n),
         SourceKey::Ground(n) => (1, n),
         _ => return None,
     };
-    (n.path >> 56 == 0).then(|| variant << 61 | u64::from(n.base) << 56 | n.path)
+    (n.path >> 40 == 0 && j >> 20 == 0)
+        .then(|| (variant << 43 | u64::from(n.base) << 40 | n.path) << 20 | j as u64)
 }
 
 /// Sorts a call's node uses by key, then step: each step then sums its nodes in key
-/// order. By the packed key where every key packs (comparing the enum keys was a twentieth
-/// of a warm annual run), the same order either way.
-pub(super) fn sort_uses<T>(uses: &mut [(SourceKey, usize, T)]) {
-    if uses.iter().all(|u| packed(&u.0).is_some()) {
-        uses.sort_unstable_by_key(|u| (packed(&u.0).unwrap_or(u64::MAX), u.1));
-    } else {
-        uses.sort_unstable_by_key(|u| (u.0, u.1));
+/// order. Through one u64 per use where every use packs (sorting the uses by their enum
+/// keys was a twentieth of a warm annual run), the same order either way.
+pub(super) fn sort_uses<T: Copy>(uses: &mut Vec<(SourceKey, usize, T)>) {
+    let order: Option<Vec<(u64, u32)>> = uses
+        .iter()
+        .enumerate()
+        .map(|(i, u)| packed(&u.0, u.1).map(|k| (k, i as u32)))
+        .collect();
+    match order {
+        Some(mut order) if uses.len() < u32::MAX as usize => {
+            order.sort_unstable();
+            *uses = order.iter().map(|&(_, i)| uses[i as usize]).collect();
+        }
+        _ => uses.sort_by_key(|u| (u.0, u.1)),
     }
 }
 

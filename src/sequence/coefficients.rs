@@ -504,11 +504,22 @@ impl Coefficients {
                             sky: from_lux(csky[s] as f64),
                             ..SensorDirect::default()
                         };
-                        let parts: Vec<Rgb> = (0..p)
-                            .map(|q| from_lux(acc[(3 + q) * k + s] as f64))
-                            .collect();
+                        // The parts on the stack (four at every preset): one allocation
+                        // per sensor and step was a twentieth of a warm year.
+                        let part = |q: usize| from_lux(acc[(3 + q) * k + s] as f64);
+                        let mut stack = [Rgb::ZERO; 8];
+                        let heap: Vec<Rgb>;
+                        let parts: &[Rgb] = if p <= stack.len() {
+                            for (q, x) in stack[..p].iter_mut().enumerate() {
+                                *x = part(q);
+                            }
+                            &stack[..p]
+                        } else {
+                            heap = (0..p).map(part).collect();
+                            &heap
+                        };
                         let ind = TransportSensor::from_parts(
-                            &parts,
+                            parts,
                             from_lux(acc[(3 + p) * k + s] as f64),
                         );
                         let mut v = SensorValue::estimate(&fine, &coarse, &ind, iteration_rel);

@@ -35,7 +35,7 @@ pub fn write_metrics(
     let (tp, sp) = (out.join("illuminance.csv"), out.join("direct_sun.csv"));
     let mut total = export::IlluminanceRows::open(&tp)?;
     let mut sun = export::IlluminanceRows::open(&sp)?;
-    let mut acc = vec![metrics::SensorAccumulator::default(); total.columns()];
+    let mut tables = MetricTables::new(total.columns(), step_minutes, params);
     let mut tv = Vec::new();
     let mut rows = 0usize;
     // The sun's table is parsed on a second thread, beside the total's: parsing is the
@@ -78,14 +78,62 @@ pub fn write_metrics(
                     ),
                 ));
             }
-            let time = parse_times(&[t])?[0];
-            let occupied = metrics::is_occupied(time, step_minutes, params);
-            // Night steps are written as 0 lx: counted dark whether flagged or not.
-            for (a, (&e, &es)) in acc.iter_mut().zip(tv.iter().zip(&sv)) {
-                a.add(e, es, occupied, true, params);
-            }
+            tables.row(parse_times(&[t])?[0], &tv, &sv);
         }
     })?;
+    tables.write(out)
+}
+
+/// `metrics.csv` and `summary.json` accumulated row by row, in time order: from the
+/// tables on disk ([`write_metrics`]) or from the rows as a run writes them (their values
+/// as the tables hold them, [`export::written_value`]), the same bits either way.
+pub struct MetricTables<'p> {
+    acc: Vec<metrics::SensorAccumulator>,
+    rows: usize,
+    step_minutes: u32,
+    params: &'p MetricParams,
+}
+
+impl<'p> MetricTables<'p> {
+    /// Empty tables of `sensors` columns, for steps of `step_minutes`.
+    pub fn new(sensors: usize, step_minutes: u32, params: &'p MetricParams) -> Self {
+        MetricTables {
+            acc: vec![metrics::SensorAccumulator::default(); sensors],
+            rows: 0,
+            step_minutes,
+            params,
+        }
+    }
+
+    /// Adds the row at `time`: total and direct-sun illuminance per sensor, lux, as the
+    /// tables hold them.
+    pub fn row(&mut self, time: NaiveDateTime, total: &[f64], sun: &[f64]) {
+        self.rows += 1;
+        let occupied = metrics::is_occupied(time, self.step_minutes, self.params);
+        // Night steps are written as 0 lx: counted dark whether flagged or not.
+        for (a, (&e, &es)) in self.acc.iter_mut().zip(total.iter().zip(sun)) {
+            a.add(e, es, occupied, true, self.params);
+        }
+    }
+
+    /// Writes `metrics.csv` and `summary.json` in `out` (with its `grids.json`), and returns
+    /// the per-sensor metrics.
+    ///
+    /// # Errors
+    /// Files that cannot be read or written.
+    pub fn write(self, out: &Path) -> Result<Vec<metrics::SensorMetrics>> {
+        let (params, step_minutes, acc) = (self.params, self.step_minutes, self.acc);
+        write_tables(out, step_minutes, params, &acc, self.rows)
+    }
+}
+
+fn write_tables(
+    out: &Path,
+    step_minutes: u32,
+    params: &MetricParams,
+    acc: &[metrics::SensorAccumulator],
+    rows: usize,
+) -> Result<Vec<metrics::SensorMetrics>> {
     let sensors = if rows == 0 { 0 } else { acc.len() };
     let hours = step_minutes as f64 / 60.0;
     let per: Vec<metrics::SensorMetrics> = acc[..sensors].iter().map(|a| a.finish(hours)).collect();
