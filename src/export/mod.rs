@@ -46,53 +46,55 @@ pub fn format_value(v: f64) -> String {
     s
 }
 
+/// `v` in thousandths, rounded, when that is the exactly rounded decimal: `v` is not
+/// zero, below 10⁶ and more than 10⁻⁶ thousandths from a rounding tie (below 10⁹, v·1000
+/// is within 1.2·10⁻⁷ of the exact product, so such a fraction rounds as the exact one
+/// does); `None` otherwise.
+fn thousandths(v: f64) -> Option<i64> {
+    let x = v * 1000.0;
+    (v != 0.0 && x.abs() < 1e9 && (x.abs().fract() - 0.5).abs() > 1e-6).then(|| x.round() as i64)
+}
+
 /// Appends `v` as [`format_value`] writes it. A year's tables are millions of values, and
 /// the general float formatting was a tenth of a warm annual run: away from a rounding
-/// tie, the product v·1000 rounded is the exactly rounded decimal, written as an integer.
+/// tie ([`thousandths`]), the value is written as an integer of thousandths.
 pub fn push_value(s: &mut String, v: f64) {
     // Night steps are half of an annual series: their zeros skip the arithmetic.
     if v == 0.0 {
         s.push_str("0.000");
         return;
     }
-    let x = v * 1000.0;
-    // Below 10⁹, x is within 1.2·10⁻⁷ of the exact product: a fraction more than 10⁻⁶
-    // from ½ rounds as the exact one does.
-    if x.abs() < 1e9 && (x.abs().fract() - 0.5).abs() > 1e-6 {
-        let r = x.round() as i64;
-        if r < 0 {
-            s.push('-');
-        }
-        let a = r.unsigned_abs();
-        let mut b = itoa::Buffer::new();
-        s.push_str(b.format(a / 1000));
-        s.push('.');
-        let f = a % 1000;
-        for d in [f / 100, f / 10 % 10, f % 10] {
-            s.push(char::from(b'0' + d as u8));
-        }
-        if r == 0 && s.ends_with("-0.000") {
-            // −0.000 is written 0.000.
-            s.truncate(s.len() - 6);
-            s.push_str("0.000");
-        }
+    let Some(r) = thousandths(v) else {
+        let f = format!("{v:.3}");
+        s.push_str(if f == "-0.000" { "0.000" } else { &f });
         return;
+    };
+    // −0.000 (r = 0 from a negative v) gets no sign.
+    if r < 0 {
+        s.push('-');
     }
-    let f = format!("{v:.3}");
-    s.push_str(if f == "-0.000" { "0.000" } else { &f });
+    let a = r.unsigned_abs();
+    s.push_str(itoa::Buffer::new().format(a / 1000));
+    s.push('.');
+    let f = a % 1000;
+    for d in [f / 100, f / 10 % 10, f % 10] {
+        s.push(char::from(b'0' + d as u8));
+    }
 }
 
 /// The value a table holds once `v` is written ([`push_value`]) and read back: the
 /// metrics of a run are taken from these without reading its tables again.
 pub fn written_value(v: f64) -> f64 {
-    let x = v * 1000.0;
-    if v != 0.0 && x.abs() < 1e9 && (x.abs().fract() - 0.5).abs() > 1e-6 {
-        // An integer over 1000: the double nearest the decimal, as parsing gives.
-        let r = x.round();
-        return if r == 0.0 { 0.0 } else { r / 1000.0 };
+    if v == 0.0 {
+        return 0.0;
     }
-    // Written "0.000" for −0: read back as +0.
-    format_value(v).parse::<f64>().unwrap_or(f64::NAN)
+    match thousandths(v) {
+        // −0 is written 0.000 and read back as +0.
+        Some(0) => 0.0,
+        // Two exact integers divided: the double nearest the decimal, as parsing gives.
+        Some(r) => r as f64 / 1000.0,
+        None => format_value(v).parse::<f64>().unwrap_or(f64::NAN),
+    }
 }
 
 /// The `illuminance.csv` header line `time,s0,s1,…` (newline included).

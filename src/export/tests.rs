@@ -8,12 +8,10 @@ use chrono::TimeDelta;
 fn values_are_written_as_the_exactly_rounded_decimal() {
     // Against the general formatting: random magnitudes and signs, decimal ties (x.xxx5,
     // whose binary value falls either side), and the edges.
-    let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+    let mut i = 0u64;
     let mut next = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        seed
+        i += 1;
+        crate::math::rng::mix64(i)
     };
     let mut values = vec![
         0.0,

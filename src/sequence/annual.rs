@@ -305,15 +305,11 @@ pub fn run_annual(
     // Every lit step's sky, so the coefficients of all its sources are computed (or read)
     // together before the steps run.
     // What each planned step needs (a solar position each: in parallel).
+    days.par_iter_mut()
+        .flatten()
+        .for_each(|s| s.kind = classify(scene, s.record));
     let planned: Vec<&Planned> = days.iter().flatten().collect();
-    let kinds: Vec<Kind> = planned
-        .par_iter()
-        .map(|s| classify(scene, s.record))
-        .collect();
-    for (s, k) in days.iter_mut().flatten().zip(&kinds) {
-        s.kind = *k;
-    }
-    let planned: Vec<&Planned> = days.iter().flatten().collect();
+    let kinds: Vec<Kind> = planned.iter().map(|s| s.kind).collect();
     let lit: Vec<(StepTime, SkySpec)> = planned
         .iter()
         .zip(&kinds)

@@ -239,11 +239,7 @@ impl Ctx<'_> {
         };
         let (_, _, mut cut) = self.sky_and_cut(&day[i])?;
         day_cuts::canonical(&mut cut);
-        let held = c[i].as_ref().expect("a lit step");
-        Ok(cut.sources == held.sources
-            && cut.coarse == held.coarse
-            && cut.negligible == held.negligible
-            && cut.sun_snapping_deg == held.sun_snapping_deg)
+        Ok(c[i].as_ref() == Some(&cut))
     }
 
     /// The zeros of a step without daylight.

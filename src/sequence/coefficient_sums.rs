@@ -116,12 +116,10 @@ mod tests {
     #[test]
     fn packed_keys_sort_as_the_keys_do() {
         use crate::sources::SkyNodeKey;
-        let mut seed = 12345u64;
+        let mut i = 0u64;
         let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
+            i += 1;
+            crate::math::rng::mix64(i)
         };
         let mut uses: Vec<(SourceKey, usize, ())> = (0..5000)
             .map(|_| {

@@ -36,51 +36,35 @@ pub fn write_metrics(
     let mut total = export::IlluminanceRows::open(&tp)?;
     let mut sun = export::IlluminanceRows::open(&sp)?;
     let mut tables = MetricTables::new(total.columns(), step_minutes, params);
-    let mut tv = Vec::new();
+    let (mut tv, mut sv) = (Vec::new(), Vec::new());
     let mut rows = 0usize;
-    // The sun's table is parsed on a second thread, beside the total's: parsing is the
-    // work here, serial at the end of a run.
-    type SunRow = Result<Option<(String, Vec<f64>)>>;
-    std::thread::scope(|scope| -> Result<()> {
-        let (tx, rx) = std::sync::mpsc::sync_channel::<SunRow>(64);
-        scope.spawn(move || loop {
-            let mut v = Vec::new();
-            let row = sun.next_row(&mut v).map(|t| t.map(|t| (t, v)));
-            let end = !matches!(row, Ok(Some(_)));
-            if tx.send(row).is_err() || end {
-                break;
-            }
-        });
-        // After its last row the thread is gone: the table has ended.
-        let next_sun = || rx.recv().unwrap_or(Ok(None));
-        loop {
-            let (t, s) = (total.next_row(&mut tv)?, next_sun()?);
-            let (Some(t), Some((s, sv))) = (t, s) else {
-                if total.next_row(&mut tv)?.is_some() || next_sun()?.is_some() {
-                    return Err(Error::input(
-                        &sp,
-                        Some(rows + 2),
-                        None,
-                        format!("has a different number of rows from {}", tp.display()),
-                    ));
-                }
-                return Ok(());
-            };
-            rows += 1;
-            if t != s || tv.len() != sv.len() {
+    loop {
+        let (t, s) = (total.next_row(&mut tv)?, sun.next_row(&mut sv)?);
+        let (Some(t), Some(s)) = (t, s) else {
+            if total.next_row(&mut tv)?.is_some() || sun.next_row(&mut sv)?.is_some() {
                 return Err(Error::input(
                     &sp,
-                    Some(rows + 1),
-                    Some(&s),
-                    format!(
-                        "row {rows} differs in time or width from {}'s {t}",
-                        tp.display()
-                    ),
+                    Some(rows + 2),
+                    None,
+                    format!("has a different number of rows from {}", tp.display()),
                 ));
             }
-            tables.row(parse_times(&[t])?[0], &tv, &sv);
+            break;
+        };
+        rows += 1;
+        if t != s || tv.len() != sv.len() {
+            return Err(Error::input(
+                &sp,
+                Some(rows + 1),
+                Some(&s),
+                format!(
+                    "row {rows} differs in time or width from {}'s {t}",
+                    tp.display()
+                ),
+            ));
         }
-    })?;
+        tables.row(parse_times(&[t])?[0], &tv, &sv);
+    }
     tables.write(out)
 }
 
@@ -122,48 +106,41 @@ impl<'p> MetricTables<'p> {
     /// # Errors
     /// Files that cannot be read or written.
     pub fn write(self, out: &Path) -> Result<Vec<metrics::SensorMetrics>> {
-        let (params, step_minutes, acc) = (self.params, self.step_minutes, self.acc);
-        write_tables(out, step_minutes, params, &acc, self.rows)
-    }
-}
-
-fn write_tables(
-    out: &Path,
-    step_minutes: u32,
-    params: &MetricParams,
-    acc: &[metrics::SensorAccumulator],
-    rows: usize,
-) -> Result<Vec<metrics::SensorMetrics>> {
-    let sensors = if rows == 0 { 0 } else { acc.len() };
-    let hours = step_minutes as f64 / 60.0;
-    let per: Vec<metrics::SensorMetrics> = acc[..sensors].iter().map(|a| a.finish(hours)).collect();
-    let grids = export::grids::read_grids_json(out, sensors)?;
-    let column = grids
-        .as_deref()
-        .map(|g| export::grids::grid_column(g, sensors));
-    export::write_metrics_csv(&out.join("metrics.csv"), &per, column.as_deref())?;
-    let summary = metrics::summary(&per, None, params)?;
-    let mut doc = export::summary_json_value(&summary, params);
-    if let Some(grids) = &grids {
-        // The same summary over each grid's and each room's sensors.
-        let of = |ks: &[usize]| -> Result<serde_json::Value> {
-            let sub: Vec<_> = ks.iter().map(|&k| per[k].clone()).collect();
-            let s = metrics::summary(&sub, None, params)?;
-            serde_json::to_value(s).map_err(|e| Error::Internal(format!("summary.json: {e}")))
-        };
-        let mut by_grid = serde_json::Map::new();
-        for g in grids {
-            by_grid.insert(g.identifier.clone(), of(&g.sensors)?);
+        let params = self.params;
+        let sensors = if self.rows == 0 { 0 } else { self.acc.len() };
+        let hours = self.step_minutes as f64 / 60.0;
+        let per: Vec<metrics::SensorMetrics> = self.acc[..sensors]
+            .iter()
+            .map(|a| a.finish(hours))
+            .collect();
+        let grids = export::grids::read_grids_json(out, sensors)?;
+        let column = grids
+            .as_deref()
+            .map(|g| export::grids::grid_column(g, sensors));
+        export::write_metrics_csv(&out.join("metrics.csv"), &per, column.as_deref())?;
+        let summary = metrics::summary(&per, None, params)?;
+        let mut doc = export::summary_json_value(&summary, params);
+        if let Some(grids) = &grids {
+            // The same summary over each grid's and each room's sensors.
+            let of = |ks: &[usize]| -> Result<serde_json::Value> {
+                let sub: Vec<_> = ks.iter().map(|&k| per[k].clone()).collect();
+                let s = metrics::summary(&sub, None, params)?;
+                serde_json::to_value(s).map_err(|e| Error::Internal(format!("summary.json: {e}")))
+            };
+            let mut by_grid = serde_json::Map::new();
+            for g in grids {
+                by_grid.insert(g.identifier.clone(), of(&g.sensors)?);
+            }
+            let mut by_room = serde_json::Map::new();
+            for (room, ks) in export::grids::rooms(grids) {
+                by_room.insert(room, of(&ks)?);
+            }
+            doc["grids"] = by_grid.into();
+            doc["rooms"] = by_room.into();
         }
-        let mut by_room = serde_json::Map::new();
-        for (room, ks) in export::grids::rooms(grids) {
-            by_room.insert(room, of(&ks)?);
-        }
-        doc["grids"] = by_grid.into();
-        doc["rooms"] = by_room.into();
+        export::write_json(&out.join("summary.json"), &doc)?;
+        Ok(per)
     }
-    export::write_json(&out.join("summary.json"), &doc)?;
-    Ok(per)
 }
 
 /// Writes `out/report.html` ([`export::report_page`]) for the run of `scene` with the

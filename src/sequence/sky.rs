@@ -48,6 +48,7 @@ pub fn build_sky(
 }
 
 /// The sources of `sky` at `quality`: sky and ground nodes, then the sun.
+#[derive(Debug, PartialEq)]
 pub struct SkySources {
     /// Sources in order (the sun last, when it is one).
     pub sources: Vec<Source>,
