@@ -79,8 +79,8 @@ pub(super) fn operator(
     // pairs of many directions repeat, and holding every direction's list at once took
     // most of a large scene's memory. Fixed-point sums are exact, so the grouping does
     // not change a bit of the result.
-    type Acc = (Vec<(u64, [u64; 3])>, Vec<u64>, usize);
-    let fresh = || -> Acc { (Vec::new(), vec![0u64; rows], 0) };
+    type Acc = (Links, Vec<u64>, usize);
+    let fresh = || -> Acc { (Links::default(), vec![0u64; rows], 0) };
     let (all, n, _) = (0..n_dirs)
         .into_par_iter()
         .fold(fresh, |(mut acc, mut n, mut merged), m| {
@@ -89,7 +89,7 @@ pub(super) fn operator(
                 uniform(seed, 13, 2 * m as u64),
                 uniform(seed, 13, 2 * m as u64 + 1),
             );
-            let mut pairs: Vec<(u64, [u64; 3])> = Vec::new();
+            let mut pairs = Links::default();
             let mut counts = vec![0u32; rows];
             let pass_factor: Vec<Rgb> = (0..pscene.vertices.len())
                 .map(|t| pscene.pass_factor(t, d))
@@ -105,9 +105,9 @@ pub(super) fn operator(
             for (t, c) in n.iter_mut().zip(counts) {
                 *t += c as u64;
             }
-            acc.extend(merge_pairs(pairs));
+            acc.extend(pairs.merged());
             if acc.len() > 2 * merged.max(1 << 16) {
-                acc = merge_pairs(acc);
+                acc = acc.merged();
                 merged = acc.len();
             }
             (acc, n, merged)
@@ -117,12 +117,12 @@ pub(super) fn operator(
             for (x, y) in na.iter_mut().zip(nb) {
                 *x += y;
             }
-            let a = merge_pairs(a);
+            let a = a.merged();
             let len = a.len();
             (a, na, len)
         });
     let lines: u64 = n.iter().sum();
-    let entries = all.into_iter().map(|(k, q)| {
+    let entries = all.into_sorted().map(|(k, q)| {
         let (r, c) = ((k >> 32) as u32, k as u32);
         let inv = 1.0 / (n[r as usize].max(1) as f64 * FIX);
         (r, c, q.map(|x| (x as f64 * inv) as f32))
@@ -161,7 +161,7 @@ fn bundle(
     mesh: &Mesh,
     pass: &Pass,
     line: &Line,
-    pairs: &mut Vec<(u64, [u64; 3])>,
+    pairs: &mut Links,
     counts: &mut [u32],
 ) {
     let (d, pass_factor) = (line.d, line.pass_factor);
@@ -175,7 +175,7 @@ fn bundle(
         mesh,
     };
     // Links whose receiver this pass does not serve are dropped here.
-    let mut local: Vec<(u64, [u64; 3])> = Vec::new();
+    let mut local = Links::default();
     for j in 0..cam.height {
         for i in 0..cam.width {
             let list = ldi.pixel(i, j);
@@ -233,8 +233,8 @@ fn bundle(
                 if let Some((pr, p_up)) = prev {
                     if !p_up && up && tau != Rgb::ZERO {
                         let q = fixed(tau);
-                        local.push(((row as u64) << 32 | pr as u64, q));
-                        local.push(((pr as u64) << 32 | row as u64, q));
+                        local.push((row as u64) << 32 | pr as u64, q);
+                        local.push((pr as u64) << 32 | row as u64, q);
                     }
                 }
                 prev = Some((row, up));
@@ -242,11 +242,8 @@ fn bundle(
             }
         }
     }
-    pairs.extend(
-        local
-            .into_iter()
-            .filter(|(k, _)| pass.serves((k >> 32) as u32)),
-    );
+    local.retain(|k| pass.serves((k >> 32) as u32));
+    pairs.extend(local);
 }
 
 /// Fixed-point value of a transmission (or reflection) factor.
@@ -280,7 +277,7 @@ impl Mirror<'_> {
         base: DVec3,
         u: DVec3,
         between: Rgb,
-        pairs: &mut Vec<(u64, [u64; 3])>,
+        pairs: &mut Links,
     ) {
         if between == Rgb::ZERO {
             return;
@@ -303,22 +300,91 @@ impl Mirror<'_> {
             }
             let root = self.pscene.vertices[tri as usize];
             let source = self.mesh.row_at(tri, barycentric(root, point));
-            pairs.push(((receiver as u64) << 32 | source as u64, fixed(out.power)));
+            pairs.push((receiver as u64) << 32 | source as u64, fixed(out.power));
         }
     }
 }
 
-/// One bundle's merged (pair key, fixed-point τ) links and per-row line counts.
-/// `v` sorted by key with equal keys' values summed, in place.
-fn merge_pairs(mut v: Vec<(u64, [u64; 3])>) -> Vec<(u64, [u64; 3])> {
+/// Links (receiver row << 32 | source row, fixed-point τ), grey ones with one value: in
+/// a scene without coloured glazing every link is grey, and half the bytes of the
+/// lists, which are the operator build's largest holding.
+#[derive(Default)]
+struct Links {
+    grey: Vec<(u64, u64)>,
+    colour: Vec<(u64, [u64; 3])>,
+}
+
+impl Links {
+    fn push(&mut self, key: u64, q: [u64; 3]) {
+        if q[0] == q[1] && q[1] == q[2] {
+            self.grey.push((key, q[0]));
+        } else {
+            self.colour.push((key, q));
+        }
+    }
+
+    fn len(&self) -> usize {
+        self.grey.len() + self.colour.len()
+    }
+
+    fn extend(&mut self, other: Links) {
+        self.grey.extend(other.grey);
+        self.colour.extend(other.colour);
+    }
+
+    fn retain(&mut self, keep: impl Fn(u64) -> bool) {
+        self.grey.retain(|e| keep(e.0));
+        self.colour.retain(|e| keep(e.0));
+    }
+
+    /// Each list sorted by key, equal keys' values summed.
+    fn merged(self) -> Links {
+        Links {
+            grey: merge_pairs(self.grey, |a, b| *a += b),
+            colour: merge_pairs(self.colour, |a, b| {
+                for (x, y) in a.iter_mut().zip(b) {
+                    *x += y;
+                }
+            }),
+        }
+    }
+
+    /// Every key once, in order, with its grey and colour sums added (exact: fixed
+    /// point).
+    fn into_sorted(self) -> impl Iterator<Item = (u64, [u64; 3])> {
+        let m = self.merged();
+        let mut grey = m.grey.into_iter().peekable();
+        let mut colour = m.colour.into_iter().peekable();
+        std::iter::from_fn(move || match (grey.peek(), colour.peek()) {
+            (Some(&(kg, g)), Some(&(kc, c))) => Some(if kg < kc {
+                grey.next();
+                (kg, [g; 3])
+            } else if kc < kg {
+                colour.next();
+                (kc, c)
+            } else {
+                grey.next();
+                colour.next();
+                (kc, c.map(|x| x + g))
+            }),
+            (Some(&(kg, g)), None) => {
+                grey.next();
+                Some((kg, [g; 3]))
+            }
+            (None, Some(_)) => colour.next(),
+            (None, None) => None,
+        })
+    }
+}
+
+/// `v` sorted by key with equal keys' values summed (by `add`), in place.
+fn merge_pairs<V: Copy>(mut v: Vec<(u64, V)>, add: impl Fn(&mut V, V)) -> Vec<(u64, V)> {
     v.sort_unstable_by_key(|e| e.0);
     let mut w = 0;
     for i in 0..v.len() {
         if w > 0 && v[w - 1].0 == v[i].0 {
             let q = v[i].1;
-            for (a, b) in v[w - 1].1.iter_mut().zip(q) {
-                *a += b;
-            }
+            add(&mut v[w - 1].1, q);
         } else {
             v[w] = v[i];
             w += 1;

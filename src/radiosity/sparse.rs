@@ -68,19 +68,25 @@ impl Sparse {
         }
     }
 
-    /// Aggregates columns through `map` (column → coarse column), rows kept.
+    /// Aggregates columns through `map` (column → coarse column), rows kept; row by row,
+    /// without a copy of the entries.
     pub(super) fn map_cols(&self, map: &[u32]) -> Sparse {
-        let mut entries = Vec::new();
-        for r in 0..self.rows() {
-            let (a, b) = (self.offsets[r] as usize, self.offsets[r + 1] as usize);
-            let row: Vec<(u32, [f32; 3])> = (a..b)
+        let entries = (0..self.rows()).flat_map(|r| {
+            self.mapped_row(r, map)
+                .into_iter()
+                .map(move |(c, v)| (r as u32, c, v))
+        });
+        Sparse::from_sorted(self.rows(), entries)
+    }
+
+    /// Row `r` with its columns aggregated through `map`, sorted by column.
+    pub(super) fn mapped_row(&self, r: usize, map: &[u32]) -> Vec<(u32, [f32; 3])> {
+        let (a, b) = (self.offsets[r] as usize, self.offsets[r + 1] as usize);
+        merge_columns(
+            (a..b)
                 .map(|k| (map[self.cols[k] as usize], self.val(k)))
-                .collect();
-            for (c, v) in merge_columns(row) {
-                entries.push((r as u32, c, v));
-            }
-        }
-        Sparse::from_sorted(self.rows(), entries.into_iter())
+                .collect(),
+        )
     }
 }
 

@@ -18,7 +18,7 @@
 
 use super::coefficients::{Coefficients, CutBatch};
 use super::config::{Quality, SkySpec};
-use super::direct::{mesh_irradiance, sensors_from_responses, MeshMemo, MeshWeights};
+use super::direct::{add_mesh_irradiance, sensors_from_responses, MeshMemo, MeshWeights};
 use super::directions::{DirectionData, Directions};
 use super::estimate::{SensorValue, ERROR_MODEL};
 use super::report::{Report, StageTimes, SunReport};
@@ -510,14 +510,9 @@ impl<'a> Engine<'a> {
         let mut out = Interreflected::default();
         match &self.operator {
             Some(op) => {
-                let weights = times.time("transfer_mesh", || self.mesh_weights(op, sources, data));
-                let e = mesh_irradiance(op.rows(), sources, &weights);
+                let (e, et) = times.time("transfer_mesh", || self.mesh_direct(op, sources, data));
                 let (next, rep) = times.time("interreflection", || op.solve(&e, previous));
-                if let Some(m) = &self.surfaces {
-                    let mut et = vec![Rgb::ZERO; op.rows()];
-                    for (src, w) in sources.iter().zip(&weights) {
-                        m.add_transmitted(&mut et, src, w, scene);
-                    }
+                if let (Some(m), Some(et)) = (&self.surfaces, et) {
                     let sin_alt = report.sun.altitude_deg.to_radians().sin();
                     let k = dni_dhi.map_or(1.0, |(dni, dhi)| {
                         SurfaceMap::solar_scale(sources, dni, dhi, sin_alt)
@@ -584,20 +579,35 @@ impl<'a> Engine<'a> {
         values
     }
 
-    /// Every source's mesh weights, in source order (computed in parallel, memoised).
-    fn mesh_weights(
+    /// The direct irradiance of the operator's mesh rows (RGB W/m²) and, with surface
+    /// output, the irradiance transmitted through its glazing: the sources' mesh weights
+    /// (memoised) computed in parallel a block at a time and summed in source order, so
+    /// that only a block's weights are held at once and the sums do not depend on it.
+    fn mesh_direct(
         &self,
         op: &Transport,
         sources: &[Source],
         data: &[Arc<DirectionData>],
-    ) -> Vec<MeshWeights> {
-        sources
-            .par_iter()
-            .zip(data)
-            .map(|(src, d)| {
-                let res = self.dirs.quality().projection.resolution_for(src.is_sun());
-                self.mesh_memo.weights(self.scene, op, src, res, &d.record)
-            })
-            .collect()
+    ) -> (Vec<Rgb>, Option<Vec<Rgb>>) {
+        let block = 8 * rayon::current_num_threads().max(1);
+        let mut e = vec![Rgb::ZERO; op.rows()];
+        let mut et = self.surfaces.as_ref().map(|_| vec![Rgb::ZERO; op.rows()]);
+        for (srcs, ds) in sources.chunks(block).zip(data.chunks(block)) {
+            let weights: Vec<MeshWeights> = srcs
+                .par_iter()
+                .zip(ds)
+                .map(|(src, d)| {
+                    let res = self.dirs.quality().projection.resolution_for(src.is_sun());
+                    self.mesh_memo.weights(self.scene, op, src, res, &d.record)
+                })
+                .collect();
+            add_mesh_irradiance(&mut e, srcs, &weights);
+            if let (Some(m), Some(et)) = (&self.surfaces, et.as_mut()) {
+                for (src, w) in srcs.iter().zip(&weights) {
+                    m.add_transmitted(et, src, w, self.scene);
+                }
+            }
+        }
+        (e, et)
     }
 }
