@@ -105,6 +105,11 @@ impl ChannelValues {
         Some(ChannelValues { values, rgb })
     }
 
+    /// Frees the spare capacity of the growth by pushes.
+    pub fn shrink_to_fit(&mut self) {
+        self.values.shrink_to_fit();
+    }
+
     /// Bytes of the stored values.
     pub fn bytes(&self) -> u64 {
         4 * self.values.len() as u64

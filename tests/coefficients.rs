@@ -120,6 +120,7 @@ fn daylight_coefficients_equal_forward_solves_within_their_stated_errors() {
         defer_operator: false,
         mesh_solution: false,
         values_only: false,
+        count_elements_only: false,
     };
     let forward = Engine::new(&scene, &q, &store, &opts);
     let mut dc = Engine::new(&scene, &q, &store, &opts);
@@ -262,6 +263,7 @@ fn steps_summed_together_equal_steps_summed_alone() {
         defer_operator: false,
         mesh_solution: false,
         values_only: false,
+        count_elements_only: false,
     };
     let mut dc = Engine::new(&scene, &q, &store, &opts);
     assert!(dc.prepare(&steps).unwrap());

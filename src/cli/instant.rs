@@ -27,6 +27,7 @@ pub fn run(a: InstantArgs, cap: &MemoryCap) -> Result<()> {
     let opts = sequence::EngineOptions {
         mesh_solution: a.gltf.is_some(),
         max_memory_bytes: cap.bytes,
+        count_elements_only: true,
         ..sequence::EngineOptions::default()
     };
     let mut result = if a.sky == SkyArg::Image {

@@ -149,6 +149,24 @@ impl Hierarchy {
     }
 }
 
+/// Leaves of the union of the refinements that make the elements `keys` exist, over
+/// `triangles` roots: what [`Hierarchy::leaf_count`] gives after inserting them all, from
+/// the set of split elements alone (every split adds three leaves), without the arena's
+/// vertices. For a step whose element count is reported but whose elements nobody reads.
+pub fn union_leaf_count(triangles: usize, keys: impl Iterator<Item = ElementKey>) -> usize {
+    let mut split: std::collections::HashSet<ElementKey, ahash::RandomState> = Default::default();
+    for key in keys {
+        let mut k = key;
+        while let Some(p) = k.parent() {
+            if !split.insert(p) {
+                break;
+            }
+            k = p;
+        }
+    }
+    triangles + 3 * split.len()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -173,5 +191,39 @@ mod tests {
         assert_eq!(k.depth(), 2);
         assert_eq!(k.vertices(v), split(split(v)[3])[1]);
         assert_eq!(k.parent().unwrap().parent().unwrap(), ElementKey::root(7));
+    }
+
+    #[test]
+    fn the_union_leaf_count_equals_the_arena_s() {
+        let v = [DVec3::ZERO, DVec3::X, DVec3::Y];
+        let elements: Vec<Element> = (0..3)
+            .map(|i| Element {
+                key: ElementKey::root(i),
+                vertices: v,
+                area: 0.5,
+                parent: None,
+                first_child: None,
+            })
+            .collect();
+        let index = elements
+            .iter()
+            .enumerate()
+            .map(|(i, e)| (e.key, i as u32))
+            .collect();
+        let mut h = Hierarchy { elements, index };
+        // Overlapping refinements: shared ancestors, a leaf that is another's ancestor,
+        // a root never split.
+        let keys = [
+            ElementKey::root(0).child(3).child(1),
+            ElementKey::root(0).child(3).child(2).child(0),
+            ElementKey::root(0).child(3),
+            ElementKey::root(1).child(0),
+            ElementKey::root(1).child(0).child(0),
+        ];
+        for k in keys {
+            h.insert(k);
+        }
+        assert_eq!(h.leaf_count(), 3 + 3 * 5);
+        assert_eq!(union_leaf_count(3, keys.into_iter()), h.leaf_count());
     }
 }

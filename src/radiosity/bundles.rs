@@ -394,3 +394,42 @@ fn merge_pairs<V: Copy>(mut v: Vec<(u64, V)>, add: impl Fn(&mut V, V)) -> Vec<(u
     v.shrink_to_fit();
     v
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::rng::mix64;
+    use std::collections::BTreeMap;
+
+    /// Grey and coloured links, pushed in any order and merged in any grouping, read back
+    /// as one sum per key in key order: the same as a plain map's sums.
+    #[test]
+    fn links_sum_per_key_whatever_their_colour_and_grouping() {
+        let mut want: BTreeMap<u64, [u64; 3]> = BTreeMap::new();
+        let mut parts = vec![Links::default(), Links::default(), Links::default()];
+        for i in 0..3000u64 {
+            let h = mix64(i);
+            let key = ((h % 37) << 32) | ((h >> 20) % 41);
+            let g = (h >> 40) % 1000;
+            let q = if h % 5 == 0 {
+                [g, g + 1, g + 7]
+            } else {
+                [g; 3]
+            };
+            let w = want.entry(key).or_default();
+            for (a, b) in w.iter_mut().zip(q) {
+                *a += b;
+            }
+            parts[(h % 3) as usize].push(key, q);
+        }
+        let mut all = Links::default();
+        for p in parts {
+            all.extend(p.merged());
+            all = all.merged();
+        }
+        assert!(!all.grey.is_empty() && !all.colour.is_empty());
+        let got: Vec<(u64, [u64; 3])> = all.into_sorted().collect();
+        let want: Vec<(u64, [u64; 3])> = want.into_iter().collect();
+        assert_eq!(got, want);
+    }
+}

@@ -61,6 +61,10 @@ impl Sparse {
         for r in 0..n_rows {
             offsets[r + 1] += offsets[r];
         }
+        // Grown by doubling: up to half the capacity would be spare, and the operator's
+        // matrices are held for the whole set-up.
+        cols.shrink_to_fit();
+        vals.shrink_to_fit();
         Sparse {
             offsets,
             cols,

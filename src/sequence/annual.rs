@@ -300,6 +300,7 @@ pub fn run_annual(
             defer_operator: opts.daylight_coefficients,
             mesh_solution: false,
             values_only: false,
+            count_elements_only: false,
         },
     );
     // Every lit step's sky, so the coefficients of all its sources are computed (or read)

@@ -23,9 +23,9 @@ pub use super::sky::build_sky;
 pub struct InstantResult {
     /// Per sensor, in .pts order.
     pub sensors: Vec<SensorValue>,
-    /// The refined element hierarchy.
+    /// The refined element hierarchy (empty with [`EngineOptions::count_elements_only`]).
     pub hierarchy: Hierarchy,
-    /// Direct irradiance per element.
+    /// Direct irradiance per element (empty with [`EngineOptions::count_elements_only`]).
     pub direct: DirectIrradiance,
     /// The global-line operator and its solution, when the scene needed interreflection.
     pub transport: Option<(Transport, TransportState)>,
@@ -40,7 +40,8 @@ pub struct InstantResult {
 
 impl InstantResult {
     fn of(engine: Engine, step: Step) -> InstantResult {
-        let (hierarchy, direct) = step.elements.expect("an instant asks for its elements");
+        // None when the engine only counted them (`count_elements_only`).
+        let (hierarchy, direct) = step.elements.unwrap_or_default();
         InstantResult {
             sensors: step.sensors,
             hierarchy,

@@ -465,7 +465,13 @@ impl<'a> Engine<'a> {
         let records: Vec<&DirectionRecord> = data.iter().map(|d| &d.record).collect();
         count_sources(&sources, &records, self.scene, &mut report.counts);
         // 4. Direct transfer: the refined elements when asked; the mesh in stage 5.
-        let elements = detail.then(|| {
+        if detail && self.opts.count_elements_only {
+            report.counts.elements_after = times.time("transfer", || {
+                let keys = records.iter().flat_map(|r| r.leaves.iter().map(|l| l.key));
+                crate::hierarchy::union_leaf_count(self.scene.triangles.len(), keys)
+            });
+        }
+        let elements = (detail && !self.opts.count_elements_only).then(|| {
             times.time("transfer", || {
                 let mut h = Hierarchy::new(self.scene);
                 let d = transfer::transfer(&mut h, &sources, &records);
