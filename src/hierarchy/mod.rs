@@ -85,14 +85,17 @@ pub struct Hierarchy {
 impl Hierarchy {
     /// The unrefined hierarchy: one element per input triangle.
     pub fn new(scene: &Scene) -> Hierarchy {
-        let elements: Vec<Element> = scene
-            .triangles
-            .iter()
+        Hierarchy::of_roots(scene.triangles.iter().map(|t| t.v))
+    }
+
+    /// The unrefined hierarchy of triangles `roots` (scene frame, m), in order.
+    fn of_roots(roots: impl Iterator<Item = [DVec3; 3]>) -> Hierarchy {
+        let elements: Vec<Element> = roots
             .enumerate()
-            .map(|(i, t)| Element {
+            .map(|(i, v)| Element {
                 key: ElementKey::root(i as u32),
-                vertices: t.v,
-                area: t.area(),
+                vertices: v,
+                area: 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length(),
                 parent: None,
                 first_child: None,
             })
@@ -196,21 +199,7 @@ mod tests {
     #[test]
     fn the_union_leaf_count_equals_the_arena_s() {
         let v = [DVec3::ZERO, DVec3::X, DVec3::Y];
-        let elements: Vec<Element> = (0..3)
-            .map(|i| Element {
-                key: ElementKey::root(i),
-                vertices: v,
-                area: 0.5,
-                parent: None,
-                first_child: None,
-            })
-            .collect();
-        let index = elements
-            .iter()
-            .enumerate()
-            .map(|(i, e)| (e.key, i as u32))
-            .collect();
-        let mut h = Hierarchy { elements, index };
+        let mut h = Hierarchy::of_roots(std::iter::repeat_n(v, 3));
         // Overlapping refinements: shared ancestors, a leaf that is another's ancestor,
         // a root never split.
         let keys = [
