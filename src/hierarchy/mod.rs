@@ -3,7 +3,7 @@
 //! so refinements found for different sources (and cached) merge into one hierarchy.
 
 use crate::math::quadtree;
-use crate::scene::Scene;
+use crate::scene::{Scene, Triangle};
 use glam::DVec3;
 use std::collections::HashMap;
 
@@ -85,17 +85,18 @@ pub struct Hierarchy {
 impl Hierarchy {
     /// The unrefined hierarchy: one element per input triangle.
     pub fn new(scene: &Scene) -> Hierarchy {
-        Hierarchy::of_roots(scene.triangles.iter().map(|t| t.v))
+        Hierarchy::of_roots(&scene.triangles)
     }
 
-    /// The unrefined hierarchy of triangles `roots` (scene frame, m), in order.
-    fn of_roots(roots: impl Iterator<Item = [DVec3; 3]>) -> Hierarchy {
+    /// The unrefined hierarchy of the triangles `roots`, in order.
+    fn of_roots(roots: &[Triangle]) -> Hierarchy {
         let elements: Vec<Element> = roots
+            .iter()
             .enumerate()
-            .map(|(i, v)| Element {
+            .map(|(i, t)| Element {
                 key: ElementKey::root(i as u32),
-                vertices: v,
-                area: 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length(),
+                vertices: t.v,
+                area: t.area(),
                 parent: None,
                 first_child: None,
             })
@@ -198,8 +199,12 @@ mod tests {
 
     #[test]
     fn the_union_leaf_count_equals_the_arena_s() {
-        let v = [DVec3::ZERO, DVec3::X, DVec3::Y];
-        let mut h = Hierarchy::of_roots(std::iter::repeat_n(v, 3));
+        let t = Triangle {
+            v: [DVec3::ZERO, DVec3::X, DVec3::Y],
+            material: 0,
+            group: 0,
+        };
+        let mut h = Hierarchy::of_roots(&[t; 3]);
         // Overlapping refinements: shared ancestors, a leaf that is another's ancestor,
         // a root never split.
         let keys = [

@@ -465,20 +465,22 @@ impl<'a> Engine<'a> {
         let records: Vec<&DirectionRecord> = data.iter().map(|d| &d.record).collect();
         count_sources(&sources, &records, self.scene, &mut report.counts);
         // 4. Direct transfer: the refined elements when asked; the mesh in stage 5.
-        if detail && self.opts.count_elements_only {
-            report.counts.elements_after = times.time("transfer", || {
-                let keys = records.iter().flat_map(|r| r.leaves.iter().map(|l| l.key));
-                crate::hierarchy::union_leaf_count(self.scene.triangles.len(), keys)
-            });
-        }
-        let elements = (detail && !self.opts.count_elements_only).then(|| {
-            times.time("transfer", || {
+        let elements = match (detail, self.opts.count_elements_only) {
+            (false, _) => None,
+            (true, true) => {
+                report.counts.elements_after = times.time("transfer", || {
+                    let keys = records.iter().flat_map(|r| r.leaves.iter().map(|l| l.key));
+                    crate::hierarchy::union_leaf_count(self.scene.triangles.len(), keys)
+                });
+                None
+            }
+            (true, false) => Some(times.time("transfer", || {
                 let mut h = Hierarchy::new(self.scene);
                 let d = transfer::transfer(&mut h, &sources, &records);
                 report.counts.elements_after = h.leaf_count();
                 (h, d)
-            })
-        });
+            })),
+        };
         // 5. Interreflection.
         let light = self.interreflect(&sources, &data, previous, dni_dhi, &mut times, &mut report);
         // 6–7. Sensors and their stated error.
