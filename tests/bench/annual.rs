@@ -30,6 +30,9 @@
 //! `--radiance-opts "…"` (rfluxmtx settings instead of `-ab 5 -ad 10000 -lw 1e-5`), and
 //! for `--scaling` `--max-sensors N` / `--max-triangles N` (skip larger sweep points) and
 //! `--point TRIANGLES:SENSORS` (repeatable: only these sweep points, e.g. `10000:10000`).
+//! `--point 100000:10000` also selects the large point that the sweep leaves out unless
+//! asked (issue 28: 100 000 triangles, 10 000 sensors); `--max-memory SIZE` passes the
+//! cap to every daystep run (as `daystep annual --max-memory`).
 //!
 //! Every daystep run is a child process (this binary again, `--child …`) so that its peak
 //! resident memory (VmHWM, read by the child at its end) and wall time are its own; the
@@ -78,6 +81,8 @@ struct Opts {
     max_triangles: usize,
     /// `--point T:S`: only these (triangles, sensors) points of the scaling sweep.
     points: Vec<(usize, usize)>,
+    /// `--max-memory SIZE`: daystep's memory cap, bytes (None: the machine's default).
+    max_memory: Option<u64>,
 }
 
 fn parse_opts(args: &[String]) -> Opts {
@@ -94,6 +99,7 @@ fn parse_opts(args: &[String]) -> Opts {
         max_sensors: usize::MAX,
         max_triangles: usize::MAX,
         points: Vec::new(),
+        max_memory: None,
     };
     let date = |s: &str| {
         NaiveDate::parse_from_str(s, "%Y-%m-%d")
@@ -122,6 +128,12 @@ fn parse_opts(args: &[String]) -> Opts {
             "--radiance-opts" => o.radiance_opts = Some(value()),
             "--max-sensors" => o.max_sensors = num(value()),
             "--max-triangles" => o.max_triangles = num(value()),
+            "--max-memory" => {
+                let v = value();
+                let cap = daystep::memory::MemoryCap::parse(&v)
+                    .unwrap_or_else(|e| panic!("--max-memory: {e}"));
+                o.max_memory = Some(cap.bytes);
+            }
             "--point" => {
                 let v = value();
                 let (t, s) = v
@@ -133,18 +145,20 @@ fn parse_opts(args: &[String]) -> Opts {
                 "unknown argument {other:?}; modes: --office-only, --no-radiance, --scaling \
                  (trial options: --days N, --start/--end YYYY-MM-DD, --radiance-nproc N, \
                  --radiance-opts \"…\", --max-sensors N, --max-triangles N, \
-                 --point TRIANGLES:SENSORS)"
+                 --point TRIANGLES:SENSORS, --max-memory SIZE)"
             ),
         }
     }
     o
 }
 
-/// The period of the runs: `None` ends are the weather file's.
+/// The period of the runs (`None` ends are the weather file's) and daystep's memory cap.
 #[derive(Clone, Copy, Debug)]
 struct Period {
     start: Option<NaiveDate>,
     end: Option<NaiveDate>,
+    /// Bytes; `None`: the machine's default.
+    max_memory: Option<u64>,
 }
 
 impl Period {
@@ -155,17 +169,20 @@ impl Period {
             return Period {
                 start: Some(s),
                 end: Some(s + chrono::Days::new(u64::from(n.max(1) - 1))),
+                max_memory: o.max_memory,
             };
         }
         if o.scaling && o.start.is_none() && o.end.is_none() {
             return Period {
                 start: Some(june15),
                 end: Some(june15 + chrono::Days::new(6)),
+                max_memory: o.max_memory,
             };
         }
         Period {
             start: o.start,
             end: o.end,
+            max_memory: o.max_memory,
         }
     }
 
@@ -187,6 +204,9 @@ impl Period {
         }
         if let Some(e) = self.end {
             v.extend(["--end".into(), e.to_string()]);
+        }
+        if let Some(b) = self.max_memory {
+            v.extend(["--max-memory".into(), b.to_string()]);
         }
         v
     }
@@ -235,6 +255,10 @@ fn child(args: &[String]) {
     let opts = AnnualOptions {
         start: o.start,
         end: o.end,
+        max_memory: o.max_memory.map(|b| daystep::memory::MemoryCap {
+            bytes: b,
+            from: format!("--max-memory {b}"),
+        }),
         ..AnnualOptions::default()
     };
     let c = RunControl {
@@ -810,19 +834,21 @@ struct Point {
 fn scaling(root: &Path, o: &Opts, work: &Path, tmp: &Path) {
     let period = Period::resolve(o);
     let epw = root.join("scenes/office/weather.epw");
-    // (sweep, target triangles, target sensors); (10 000, 1 000) is in both sweeps.
-    let plan: [(&str, usize, usize); 5] = [
+    // (sweep, target triangles, target sensors); (10 000, 1 000) is in both sweeps; the
+    // large point runs only when `--point` names it.
+    let plan: [(&str, usize, usize); 6] = [
         ("sensors", 10_000, 100),
         ("both", 10_000, 1_000),
         ("sensors", 10_000, 10_000),
         ("triangles", 1_000, 1_000),
         ("triangles", 100_000, 1_000),
+        ("large", 100_000, 10_000),
     ];
     let mut points = Vec::new();
     for (sweep, tris, sensors) in plan {
         if tris > o.max_triangles
             || sensors > o.max_sensors
-            || !(o.points.is_empty() || o.points.contains(&(tris, sensors)))
+            || !((o.points.is_empty() && sweep != "large") || o.points.contains(&(tris, sensors)))
         {
             eprintln!("skipping {tris} triangles × {sensors} sensors (--max-… or --point)");
             continue;
