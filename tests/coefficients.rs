@@ -1,7 +1,8 @@
 //! Daylight coefficients against per-step forward solves, on two clear and two overcast
 //! days of the bundled weather file, hourly and at 15-minute steps: the sky part (sky and
 //! ground nodes, direct and interreflected) is the same linear system read in another
-//! order, so equal within 1e-4 relative once both solve tightly; the sun's interreflected
+//! order, so equal within 1e-4 relative once both solve tightly (and the interreflected
+//! part within the rounding of the held responses, `RESPONSE_ROUNDOFF`); the sun's interreflected
 //! part is interpolated on the sun grid, and the stated interpolation error must cover
 //! its difference from the forward solve at its snapped sun; the stated error of whole
 //! steps must cover the difference at ≥ 95 % of lit sensor-steps.
@@ -11,6 +12,7 @@
 
 use chrono::{Datelike, Duration, NaiveDate};
 use daystep::cache::Store;
+use daystep::radiosity::coefficients::RESPONSE_ROUNDOFF;
 use daystep::scene::Scene;
 use daystep::sequence::sky::build_sky;
 use daystep::sequence::{Engine, EngineOptions, Quality, Report, SkySpec, StepTime};
@@ -144,7 +146,9 @@ fn daylight_coefficients_equal_forward_solves_within_their_stated_errors() {
             assert!((a.lux_sky - b.lux_sky).abs() <= 1e-5 * b.lux_sky.abs() + 1e-9);
             if b.lux > 1.0 {
                 sky_n += 1;
-                sky_worst = sky_worst.max((a.lux - b.lux).abs() / b.lux);
+                // Beyond the responses' rounding, which the stated error carries.
+                let beyond = ((a.lux - b.lux).abs() - RESPONSE_ROUNDOFF * b.lux_indirect).max(0.0);
+                sky_worst = sky_worst.max(beyond / b.lux);
             }
         }
         if sun.sun.is_some() {
@@ -166,11 +170,12 @@ fn daylight_coefficients_equal_forward_solves_within_their_stated_errors() {
                 if b.lux_indirect > 1.0 {
                     sun_n += 1;
                     let diff = (a.lux_indirect - b.lux_indirect).abs();
-                    // 1e-4: the solves' own difference.
-                    if diff <= e + 1e-4 * b.lux_indirect {
+                    // 1e-4: the solves' own difference; then the responses' rounding.
+                    let slack = (1e-4 + RESPONSE_ROUNDOFF) * b.lux_indirect;
+                    if diff <= e + slack {
                         sun_covered += 1;
                     }
-                    sun_worst_ratio = sun_worst_ratio.max(diff / (e + 1e-4 * b.lux_indirect));
+                    sun_worst_ratio = sun_worst_ratio.max(diff / (e + slack));
                     interp_rel.push(diff / b.lux_indirect);
                     ratios.push(diff / e.max(1e-12));
                 }

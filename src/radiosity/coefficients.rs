@@ -6,7 +6,7 @@
 //! solve).
 //!
 //! Why this order: X is rows × 3 × sensors per part and level, which for 1 620 sensors on
-//! a 20 000-row mesh would be 3 GB. Sensors are therefore solved in blocks sized to a
+//! a 20 000-row mesh would be 3 GB in f32. Sensors are therefore solved in blocks sized to a
 //! memory budget; each block's X is applied to every direction and dropped, so memory is
 //! the budget plus the coefficients (directions × sensors × (parts + 1) × 4 bytes). Each
 //! adjoint system is still solved in fixed sub-blocks of [`BLOCK`] sensors, so the values
@@ -15,12 +15,36 @@
 //! Grey: the coefficients are collapsed to illuminance (179 lm/W × the photopic weights),
 //! which is exact when every source is grey (Perez skies, their ground glow and the sun:
 //! what annual runs use); coloured skies keep the forward solve.
+//!
+//! Held in 16 bits (issue 28): a block's responses are solved in f32 and kept as
+//! bfloat16, half the bytes, so a memory cap holds twice the sensors per block. Every
+//! response and every source weight is non-negative, so a coefficient's rounding error is
+//! at most [`RESPONSE_ROUNDOFF`] of its value; the stated error adds it. bfloat16 rather
+//! than IEEE half: its f32 exponent range keeps the 10⁻⁸ responses of far site rows,
+//! which half would flush to zero. The coarse level is read only as the mean of the
+//! parts, so its responses are averaged over the parts (in f32) before they are held:
+//! one coarse copy instead of one per part.
 
-use super::response::{adjoint_block, BLOCK};
+use super::response::{Adjoint, BLOCK};
 use super::transport::Transport;
 use crate::photometry::{lux, Rgb};
+use half::bf16;
 use rayon::prelude::*;
 use std::time::Instant;
+
+/// Largest relative rounding error of a held response (bfloat16's unit roundoff, 2⁻⁸),
+/// and so of a daylight coefficient made of them (all terms non-negative).
+pub const RESPONSE_ROUNDOFF: f64 = 1.0 / 256.0;
+
+/// One sub-block's responses as held.
+struct Held {
+    /// The part, or `None` for the coarse level's mean over parts.
+    part: Option<usize>,
+    /// First sensor of the sub-block of [`BLOCK`].
+    sub: usize,
+    /// X as rows × channels × width.
+    x: Vec<bf16>,
+}
 
 /// The adjoint responses of one block of sensors, all parts and both levels, ready to turn
 /// any direction's mesh irradiance into its grey daylight coefficients at those sensors.
@@ -30,9 +54,8 @@ pub struct AdjointBlock {
     parts: usize,
     /// Channels of X: 3, or 1 for a grey operator ([`Transport::is_grey`]).
     channels: usize,
-    /// Per (part, level, sub-block of [`BLOCK`]): its first sensor and X (rows × channels
-    /// × width).
-    x: Vec<(usize, usize, usize, Vec<f32>)>,
+    /// Per sub-block of [`BLOCK`]: each part's fine X, then the coarse mean.
+    x: Vec<Held>,
     /// Gauss–Seidel sweeps, summed over the block's systems.
     pub sweeps: u64,
     /// Wall time of the solves, s.
@@ -82,12 +105,22 @@ impl Transport {
         }
     }
 
-    /// Bytes of adjoint responses per sensor (all parts and both levels).
+    /// Bytes of adjoint responses held per sensor: every part's fine level and the coarse
+    /// mean, 2 bytes per value.
     pub fn adjoint_bytes_per_sensor(&self) -> u64 {
-        self.parts.len() as u64
-            * (self.rows() + self.mesh.coarse_rows) as u64
+        (self.parts.len() * self.rows() + self.mesh.coarse_rows) as u64
             * self.adjoint_channels() as u64
-            * 4
+            * 2
+    }
+
+    /// Bytes the solves take beside the held responses with `threads` solving: one
+    /// transposed operator (column and values per entry), and per thread a sub-block's f32
+    /// responses and their start (twice rows × channels × [`BLOCK`] × 4 bytes).
+    pub fn adjoint_scratch_bytes(&self, threads: usize) -> u64 {
+        let ch = self.adjoint_channels() as u64;
+        let entries = self.parts.iter().map(|p| p.f.cols.len()).max().unwrap_or(0) as u64;
+        let per_thread = 2 * self.rows() as u64 * ch * BLOCK as u64 * 4;
+        threads as u64 * per_thread + entries * (4 + 4 * ch) + (self.rows() as u64 + 1) * 4
     }
 
     /// Sensors per [`AdjointBlock`] so that one block's responses take at most `max_bytes`
@@ -105,33 +138,59 @@ impl Transport {
         let parts = self.parts.len();
         let first = sensors.start / BLOCK * BLOCK;
         let subs: Vec<usize> = (first..sensors.end).step_by(BLOCK).collect();
-        let jobs: Vec<(usize, usize, usize)> = (0..parts)
-            .flat_map(|p| {
-                let subs = &subs;
-                (0..2).flat_map(move |l| subs.iter().map(move |&b| (p, l, b)))
-            })
-            .collect();
         let tol = self.params.tolerance;
         let max = self.params.max_sweeps;
         let k = self.parts.first().map_or(0, |p| p.g.rows());
         let channels = self.adjoint_channels();
-        let solved: Vec<(Vec<f32>, u32)> = jobs
-            .par_iter()
-            .map(|&(p, l, b)| {
-                let (f, g, rho) = self.level(p, l);
-                adjoint_block(f, g, rho, b..(b + BLOCK).min(k), tol, max, channels)
+        let mut sweeps = 0u64;
+        // Part by part and level by level: one transposed operator at a time, shared by
+        // the sub-blocks solved in parallel against it.
+        let mut solve_all = |p: usize, l: usize| -> Vec<Vec<f32>> {
+            let (f, g, rho) = self.level(p, l);
+            let adjoint = Adjoint::of(f, rho, channels);
+            let solved: Vec<(Vec<f32>, u32)> = subs
+                .par_iter()
+                .map(|&b| adjoint.solve(g, b..(b + BLOCK).min(k), tol, max))
+                .collect();
+            sweeps += solved.iter().map(|s| s.1 as u64).sum::<u64>();
+            solved.into_iter().map(|s| s.0).collect()
+        };
+        let to_held = |part: Option<usize>, sub: usize, x: Vec<f32>| Held {
+            part,
+            sub,
+            x: x.into_iter().map(bf16::from_f32).collect(),
+        };
+        // The coarse level first, summed over parts in f32 (before any fine responses are
+        // held), then its mean held in 16 bits.
+        let mut sums: Vec<Vec<f32>> = Vec::new();
+        for p in 0..parts {
+            let xs = solve_all(p, 1);
+            if sums.is_empty() {
+                sums = xs;
+            } else {
+                for (sum, x) in sums.iter_mut().zip(&xs) {
+                    sum.iter_mut().zip(x).for_each(|(a, v)| *a += v);
+                }
+            }
+        }
+        let inv = 1.0 / parts.max(1) as f32;
+        let mut x: Vec<Held> = sums
+            .into_iter()
+            .zip(&subs)
+            .map(|(mut sum, &b)| {
+                sum.iter_mut().for_each(|a| *a *= inv);
+                to_held(None, b, sum)
             })
             .collect();
-        let sweeps = solved.iter().map(|s| s.1 as u64).sum();
+        for p in 0..parts {
+            let xs = solve_all(p, 0);
+            x.extend(xs.into_iter().zip(&subs).map(|(xb, &b)| to_held(Some(p), b, xb)));
+        }
         AdjointBlock {
             sensors,
             parts,
             channels,
-            x: jobs
-                .into_iter()
-                .zip(solved)
-                .map(|((p, l, b), (x, _))| (p, l, b, x))
-                .collect(),
+            x,
             sweeps,
             seconds: t0.elapsed().as_secs_f64(),
         }
@@ -163,7 +222,6 @@ impl AdjointBlock {
         let nd = terms.len();
         let parts = self.parts;
         let stride = (parts + 1) * n;
-        let inv_parts = 1.0 / parts.max(1) as f32;
         let k = op.parts.first().map_or(0, |p| p.g.rows());
         let ch = self.channels;
         // Per level, each row's (direction, weights), directions ascending.
@@ -191,7 +249,7 @@ impl AdjointBlock {
         let levels = [by_row(0, op.rows()), by_row(1, op.mesh.coarse_rows)];
         // Sub-blocks of sensors in parallel (disjoint columns); within one, parts and
         // levels in their order, as one by one.
-        let mut subs: Vec<usize> = self.x.iter().map(|e| e.2).collect();
+        let mut subs: Vec<usize> = self.x.iter().map(|e| e.sub).collect();
         subs.sort_unstable();
         subs.dedup();
         let done: Vec<(usize, usize, Vec<f32>)> = subs
@@ -206,13 +264,10 @@ impl AdjointBlock {
                 }
                 let wb = hi - lo;
                 let mut local = vec![0f32; nd * (parts + 1) * wb];
-                for (p, l, _, x) in self.x.iter().filter(|e| e.2 == b) {
-                    let (row, scale) = if *l == 0 {
-                        (*p, 1.0)
-                    } else {
-                        (parts, inv_parts)
-                    };
-                    let (offsets, entries) = &levels[*l];
+                for held in self.x.iter().filter(|e| e.sub == b) {
+                    let (row, level) = held.part.map_or((parts, 1), |p| (p, 0));
+                    let x = &held.x;
+                    let (offsets, entries) = &levels[level];
                     for r in 0..offsets.len() - 1 {
                         let (e0, e1) = (offsets[r] as usize, offsets[r + 1] as usize);
                         for &(d, v) in &entries[e0..e1] {
@@ -224,10 +279,9 @@ impl AdjointBlock {
                                 if vc == 0.0 {
                                     continue;
                                 }
-                                let vc = vc * scale;
                                 let xs = &x[(r * ch + c) * w + (lo - b)..][..wb];
                                 for (o, xv) in o.iter_mut().zip(xs) {
-                                    *o += vc * *xv;
+                                    *o += vc * xv.to_f32();
                                 }
                             }
                         }

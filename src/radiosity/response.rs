@@ -259,94 +259,135 @@ pub(super) fn adjoint_block(
     max_sweeps: u32,
     channels: usize,
 ) -> (Vec<f32>, u32) {
-    let n = f.rows();
-    let w = range.len();
-    let ch = channels;
-    if w == 0 || n == 0 {
-        return (vec![0.0; n * ch * w], 0);
-    }
-    // Gᵀ for the block: x starts at it.
-    let mut gt = vec![0f32; n * ch * w];
-    for (j, s) in range.clone().enumerate() {
-        for e in g.offsets[s] as usize..g.offsets[s + 1] as usize {
-            let r = g.cols[e] as usize;
-            let v = g.val(e);
-            for c in 0..ch {
-                gt[(r * ch + c) * w + j] += v[c];
+    Adjoint::of(f, rho, channels).solve(g, range, tol, max_sweeps)
+}
+
+/// One part and level's adjoint operator: Fᵀ with ρ of the source row folded in, as the
+/// adjoint's Gauss–Seidel reads it (row i lists (k, ρ_k F_ki), `channels` values per
+/// entry). Made once and shared by every block of sensors solved against it: the
+/// transposition is a random-access pass over every entry, as costly as a sweep.
+pub(super) struct Adjoint {
+    /// Row i's entries are `count[i]..count[i + 1]`.
+    count: Vec<u32>,
+    cols: Vec<u32>,
+    vals: Vec<f32>,
+    channels: usize,
+    /// Largest reflectance (at least 0.5): the first sweep's contraction estimate.
+    rho_max: f64,
+}
+
+impl Adjoint {
+    /// The adjoint of operator `f` with reflectances `rho`, keeping `channels` values per
+    /// entry.
+    pub(super) fn of(f: &Sparse, rho: &[Rgb], channels: usize) -> Adjoint {
+        let n = f.rows();
+        let ch = channels;
+        let mut count = vec![0u32; n + 1];
+        for &c in &f.cols {
+            count[c as usize + 1] += 1;
+        }
+        for i in 0..n {
+            count[i + 1] += count[i];
+        }
+        let mut fill = count.clone();
+        let mut cols = vec![0u32; f.cols.len()];
+        // `ch` values per entry: a grey block keeps one.
+        let mut vals = vec![0f32; ch * f.cols.len()];
+        for (kr, (&r, w)) in rho.iter().zip(f.offsets.windows(2)).enumerate() {
+            for e in w[0] as usize..w[1] as usize {
+                let i = f.cols[e] as usize;
+                let at = fill[i] as usize;
+                fill[i] += 1;
+                cols[at] = kr as u32;
+                let v = f.val(e);
+                let rv = [
+                    (r.x * v[0] as f64) as f32,
+                    (r.y * v[1] as f64) as f32,
+                    (r.z * v[2] as f64) as f32,
+                ];
+                vals[at * ch..(at + 1) * ch].copy_from_slice(&rv[..ch]);
             }
         }
-    }
-    // Fᵀ with ρ of the source row folded in: row i lists (k, ρ_k F_ki).
-    let mut count = vec![0u32; n + 1];
-    for &c in &f.cols {
-        count[c as usize + 1] += 1;
-    }
-    for i in 0..n {
-        count[i + 1] += count[i];
-    }
-    let mut fill = count.clone();
-    let mut cols = vec![0u32; f.cols.len()];
-    // `ch` values per entry: a grey block keeps one.
-    let mut vals = vec![0f32; ch * f.cols.len()];
-    for (kr, (&r, w)) in rho.iter().zip(f.offsets.windows(2)).enumerate() {
-        for e in w[0] as usize..w[1] as usize {
-            let i = f.cols[e] as usize;
-            let at = fill[i] as usize;
-            fill[i] += 1;
-            cols[at] = kr as u32;
-            let v = f.val(e);
-            let rv = [
-                (r.x * v[0] as f64) as f32,
-                (r.y * v[1] as f64) as f32,
-                (r.z * v[2] as f64) as f32,
-            ];
-            vals[at * ch..(at + 1) * ch].copy_from_slice(&rv[..ch]);
+        let rho_max = rho.iter().map(|r| r.max_element()).fold(0.5, f64::max);
+        Adjoint {
+            count,
+            cols,
+            vals,
+            channels,
+            rho_max,
         }
     }
-    let g_max = gt.iter().fold(0f32, |a, v| a.max(v.abs()));
-    let mut x = gt.clone();
-    if g_max == 0.0 {
-        return (x, 0);
-    }
-    let floor = 1e-6 * g_max;
-    let mut new = vec![0f32; ch * w];
-    let mut prev_change = f64::INFINITY;
-    let rho_max = rho.iter().map(|r| r.max_element()).fold(0.5, f64::max);
-    for sweep in 1..=max_sweeps {
-        let mut change = 0f64;
-        for i in 0..n {
-            new.copy_from_slice(&gt[i * ch * w..(i + 1) * ch * w]);
-            for e in count[i] as usize..count[i + 1] as usize {
-                let src = cols[e] as usize * ch * w;
-                let v = &vals[e * ch..(e + 1) * ch];
-                for (c, &coef) in v.iter().enumerate() {
-                    if coef == 0.0 {
-                        continue;
-                    }
-                    let xs = &x[src + c * w..src + (c + 1) * w];
-                    for (o, xv) in new[c * w..(c + 1) * w].iter_mut().zip(xs) {
-                        *o += coef * *xv;
-                    }
+
+    /// Gauss–Seidel for the sensors `range` of gather `g` (see [`adjoint_block`]).
+    pub(super) fn solve(
+        &self,
+        g: &Sparse,
+        range: std::ops::Range<usize>,
+        tol: f64,
+        max_sweeps: u32,
+    ) -> (Vec<f32>, u32) {
+        let n = self.count.len() - 1;
+        let w = range.len();
+        let ch = self.channels;
+        let (count, cols, vals) = (&self.count, &self.cols, &self.vals);
+        if w == 0 || n == 0 {
+            return (vec![0.0; n * ch * w], 0);
+        }
+        // Gᵀ for the block: x starts at it.
+        let mut gt = vec![0f32; n * ch * w];
+        for (j, s) in range.clone().enumerate() {
+            for e in g.offsets[s] as usize..g.offsets[s + 1] as usize {
+                let r = g.cols[e] as usize;
+                let v = g.val(e);
+                for c in 0..ch {
+                    gt[(r * ch + c) * w + j] += v[c];
                 }
             }
-            let old = &mut x[i * ch * w..(i + 1) * ch * w];
-            let (mut d, mut m) = (0f32, 0f32);
-            for (o, nv) in old.iter().zip(&new) {
-                d = d.max((nv - o).abs());
-                m = m.max(nv.abs());
+        }
+        let g_max = gt.iter().fold(0f32, |a, v| a.max(v.abs()));
+        let mut x = gt.clone();
+        if g_max == 0.0 {
+            return (x, 0);
+        }
+        let floor = 1e-6 * g_max;
+        let mut new = vec![0f32; ch * w];
+        let mut prev_change = f64::INFINITY;
+        for sweep in 1..=max_sweeps {
+            let mut change = 0f64;
+            for i in 0..n {
+                new.copy_from_slice(&gt[i * ch * w..(i + 1) * ch * w]);
+                for e in count[i] as usize..count[i + 1] as usize {
+                    let src = cols[e] as usize * ch * w;
+                    let v = &vals[e * ch..(e + 1) * ch];
+                    for (c, &coef) in v.iter().enumerate() {
+                        if coef == 0.0 {
+                            continue;
+                        }
+                        let xs = &x[src + c * w..src + (c + 1) * w];
+                        for (o, xv) in new[c * w..(c + 1) * w].iter_mut().zip(xs) {
+                            *o += coef * *xv;
+                        }
+                    }
+                }
+                let old = &mut x[i * ch * w..(i + 1) * ch * w];
+                let (mut d, mut m) = (0f32, 0f32);
+                for (o, nv) in old.iter().zip(&new) {
+                    d = d.max((nv - o).abs());
+                    m = m.max(nv.abs());
+                }
+                change = change.max(d as f64 / m.max(floor) as f64);
+                old.copy_from_slice(&new);
             }
-            change = change.max(d as f64 / m.max(floor) as f64);
-            old.copy_from_slice(&new);
+            let q = if prev_change.is_finite() && prev_change > 0.0 {
+                (change / prev_change).clamp(0.5, 0.999)
+            } else {
+                self.rho_max
+            };
+            prev_change = change;
+            if change * q / (1.0 - q) <= tol {
+                return (x, sweep);
+            }
         }
-        let q = if prev_change.is_finite() && prev_change > 0.0 {
-            (change / prev_change).clamp(0.5, 0.999)
-        } else {
-            rho_max
-        };
-        prev_change = change;
-        if change * q / (1.0 - q) <= tol {
-            return (x, sweep);
-        }
+        (x, max_sweeps)
     }
-    (x, max_sweeps)
 }

@@ -53,12 +53,13 @@ const TAG_VALUES: u32 = FIRST_USER_TAG;
 /// (a large scene's projection leaves are megabytes each).
 const TAG_DIRECT: u32 = FIRST_USER_TAG + 1;
 /// Version of what a coefficient record holds, hashed into its key.
-const COEFFICIENTS_VERSION: u32 = 3;
+const COEFFICIENTS_VERSION: u32 = 4;
 /// Direct rows per node: 4 child responses, their sum, 4 uncertainties.
 const DIRECT_ROWS: usize = 9;
 /// Adjoint responses held at once without a memory cap, bytes: beyond it, larger blocks
-/// save little time (each block reads every direction once more).
-pub const RESPONSE_MAX_BYTES: u64 = 512 << 20;
+/// save little time (each block reads every direction once more). 256 MB of bfloat16
+/// responses hold as many sensors as 512 MB did in f32.
+pub const RESPONSE_MAX_BYTES: u64 = 256 << 20;
 /// Directions whose source terms are held at once while coefficients are computed, and
 /// applied together ([`crate::radiosity::AdjointBlock::apply_many`]): a few megabytes of
 /// terms each on the generated building, and the block's responses read once per batch.
@@ -297,8 +298,11 @@ impl Coefficients {
             // The operator only now: a run whose coefficients are all cached never reads it.
             let op: &Transport = op.get_or_insert_with(load_operator);
             let coefficient_bytes = (list.len() * k * (DIRECT_ROWS + parts + 1) * 4) as u64;
-            let in_flight = rayon::current_num_threads() as u64
-                * direction_bytes(quality.projection.resolution_for(true));
+            // A direction in flight per thread (applying) or the solves' scratch (solving).
+            let threads = rayon::current_num_threads();
+            let in_flight = (threads as u64
+                * direction_bytes(quality.projection.resolution_for(true)))
+            .max(op.adjoint_scratch_bytes(threads));
             // What is held beside the adjoint blocks, from sizes (not from the resident
             // memory, which other work in the process would make a moving target): the
             // same inputs always get the same blocks and the same smallest cap.
@@ -397,9 +401,10 @@ impl Coefficients {
     }
 
     /// Sensor values of `steps` from the coefficients, with `coarse_dirs` the coarser
-    /// level's directions (sensor responses only) and `iteration_rel` the solves'
-    /// tolerance. Returns per step the values (with the sun's interpolation error in
-    /// `lux_err`) and that error, lux. Node by node: each node's rows are read once for
+    /// level's directions (sensor responses only) and `iteration_rel` the relative error
+    /// of the interreflected part (the solves' tolerance and the responses' rounding).
+    /// Returns per step the values (with the sun's interpolation error in `lux_err`) and
+    /// that error, lux. Node by node: each node's rows are read once for
     /// every step that uses it (read once per step, hundreds of kilobytes a step, they
     /// kept the sums waiting on memory). Each step sums its nodes in key order, so its
     /// values do not depend on which steps share the call.

@@ -93,7 +93,10 @@ impl Engine<'_> {
                     sun_coarse: &sun_coarse[j],
                 })
                 .collect();
-            c.evaluate(&cuts, &self.coarse, self.dirs.quality().transport.tolerance)
+            // The solves' stopping error and the held responses' rounding (both relative).
+            let rel = self.dirs.quality().transport.tolerance
+                + crate::radiosity::coefficients::RESPONSE_ROUNDOFF;
+            c.evaluate(&cuts, &self.coarse, rel)
         };
         let share = t0.elapsed().as_secs_f64() / steps.len().max(1) as f64;
         steps
