@@ -184,7 +184,11 @@ impl Transport {
             .collect();
         for p in 0..parts {
             let xs = solve_all(p, 0);
-            x.extend(xs.into_iter().zip(&subs).map(|(xb, &b)| to_held(Some(p), b, xb)));
+            x.extend(
+                xs.into_iter()
+                    .zip(&subs)
+                    .map(|(xb, &b)| to_held(Some(p), b, xb)),
+            );
         }
         AdjointBlock {
             sensors,
