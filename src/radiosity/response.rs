@@ -58,18 +58,20 @@ impl Transport {
         }
         let tol = self.params.tolerance;
         let max = self.params.max_sweeps;
-        // Jobs: (part, level, sensor block), each an independent system.
         let blocks = k.div_ceil(BLOCK).max(1);
-        let jobs: Vec<(usize, usize, usize)> = (0..self.parts.len())
-            .flat_map(|p| (0..2).flat_map(move |l| (0..blocks).map(move |b| (p, l, b))))
-            .collect();
-        let solved: Vec<(Vec<f32>, u32)> = jobs
-            .par_iter()
-            .map(|&(p, l, b)| {
+        // One transposed operator per part and level, shared by its sensor blocks.
+        let solved: Vec<(Vec<f32>, u32)> = (0..self.parts.len())
+            .flat_map(|p| (0..2).map(move |l| (p, l)))
+            .flat_map(|(p, l)| {
                 let (f, g, rho) = self.level(p, l);
-                let s0 = b * BLOCK;
-                let s1 = (s0 + BLOCK).min(k);
-                adjoint_block(f, g, rho, s0..s1, tol, max, 3)
+                let adjoint = Adjoint::of(f, rho, 3);
+                (0..blocks)
+                    .into_par_iter()
+                    .map(|b| {
+                        let s0 = b * BLOCK;
+                        adjoint.solve(g, s0..(s0 + BLOCK).min(k), tol, max)
+                    })
+                    .collect::<Vec<_>>()
             })
             .collect();
         let mut x: Vec<Vec<f32>> = Vec::new();
@@ -246,22 +248,6 @@ impl Transport {
     }
 }
 
-/// Gauss–Seidel on the adjoint for sensors `range`: returns X as rows × `channels` ×
-/// |range| and the sweeps done. `channels` is 3, or 1 when ρ, F and G are grey
-/// ([`Transport::is_grey`]): the three systems are then one, solved once with channel 0's
-/// values (the same arithmetic as each of the three).
-pub(super) fn adjoint_block(
-    f: &Sparse,
-    g: &Sparse,
-    rho: &[Rgb],
-    range: std::ops::Range<usize>,
-    tol: f64,
-    max_sweeps: u32,
-    channels: usize,
-) -> (Vec<f32>, u32) {
-    Adjoint::of(f, rho, channels).solve(g, range, tol, max_sweeps)
-}
-
 /// One part and level's adjoint operator: Fᵀ with ρ of the source row folded in, as the
 /// adjoint's Gauss–Seidel reads it (row i lists (k, ρ_k F_ki), `channels` values per
 /// entry). Made once and shared by every block of sensors solved against it: the
@@ -318,7 +304,10 @@ impl Adjoint {
         }
     }
 
-    /// Gauss–Seidel for the sensors `range` of gather `g` (see [`adjoint_block`]).
+    /// Gauss–Seidel for the sensors `range` of gather `g`: returns X as rows × channels
+    /// × |range| and the sweeps done. With one channel (grey ρ, F and G,
+    /// [`Transport::is_grey`]) the three systems are one, solved once with channel 0's
+    /// values (the same arithmetic as each of the three).
     pub(super) fn solve(
         &self,
         g: &Sparse,
