@@ -406,7 +406,10 @@ fn daylight_coefficients_agree_with_forward_solves_over_two_days() {
         ("forward", "daylight coefficients")
     );
     let c = rc.coefficients.expect("coefficient counters");
-    assert!(c.nodes > 0 && c.sun_grid_vertices > 0 && c.computed == c.nodes + c.sun_grid_vertices);
+    assert!(c.nodes > 0 && c.sun_grid_vertices > 0);
+    // Every node and vertex solved, but those taking an ancestor's interreflection; the
+    // ancestors and their siblings besides.
+    assert!(c.computed >= c.nodes - c.indirect_from_ancestors + c.sun_grid_vertices);
     assert!(c.operator_needed);
     // Again from the warm cache: every coefficient read, the operator never needed, the
     // same bytes.

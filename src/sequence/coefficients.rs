@@ -33,7 +33,7 @@ use super::directions::Directions;
 use super::estimate::SensorValue;
 use super::step::StepTime;
 use crate::cache::{self, RecordKey, SceneHash, Section, FIRST_USER_TAG};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::photometry::{from_lux, lux, Rgb};
 use crate::radiosity::{DirectionTerms, Transport, TransportParams, TransportSensor};
 use crate::scene::Scene;
@@ -65,53 +65,6 @@ pub const RESPONSE_MAX_BYTES: u64 = 256 << 20;
 /// terms each on the generated building, and the block's responses read once per batch.
 const BATCH: usize = 64;
 
-/// Bytes one direction in flight takes while its coefficients are computed, at LDI
-/// resolution `resolution` (an estimate: the LDI's pixel offsets and fragments, 16 bytes
-/// per pixel of its longer side squared, and its record and mesh weights, smaller). On
-/// the generated building, the coefficients' stage peaks about 130 MB above the steps
-/// with two threads at 2048 pixels: this allows 128 MB.
-fn direction_bytes(resolution: u32) -> u64 {
-    resolution as u64 * resolution as u64 * 16
-}
-
-/// Bytes the scene, its ray tracer (BVH) and its projection copy take, estimated per
-/// triangle.
-fn scene_bytes(scene: &Scene) -> u64 {
-    scene.triangles.len() as u64 * 600 + scene.sensors.len() as u64 * 64
-}
-
-/// Bytes of adjoint responses held at once: [`RESPONSE_MAX_BYTES`], or less when the cap
-/// `max_memory` (0: none) minus what is held is smaller; at least `one_block` (the
-/// smallest adjoint block). What is held is `held` (from sizes: the operator, the scene,
-/// the coefficients and the directions in flight), or `resident` (the same with the
-/// process's resident memory for the first two) when that is larger.
-///
-/// # Errors
-/// `held + one_block` is above the cap: an input error naming `--max-memory` and the
-/// smallest cap that fits (from sizes alone, so the same inputs name the same cap).
-pub fn adjoint_budget(max_memory: u64, held: u64, resident: u64, one_block: u64) -> Result<u64> {
-    if max_memory == 0 {
-        return Ok(RESPONSE_MAX_BYTES);
-    }
-    let needed = held + one_block;
-    if needed > max_memory {
-        return Err(Error::arg(
-            "--max-memory",
-            crate::memory::format_size(max_memory),
-            format!(
-                "the daylight coefficients need at least {} (held {}, one block of adjoint \
-                 responses {}); give --max-memory {} or more",
-                crate::memory::format_size(needed),
-                crate::memory::format_size(held),
-                crate::memory::format_size(one_block),
-                crate::memory::format_size(needed),
-            ),
-        ));
-    }
-    let free = max_memory - held.max(resident.min(max_memory));
-    Ok(free.min(RESPONSE_MAX_BYTES).max(one_block))
-}
-
 /// One node's per-sensor data, rows of `sensors` f32 each.
 #[derive(Clone, Debug, Default)]
 struct NodeData {
@@ -119,14 +72,23 @@ struct NodeData {
     direct: Vec<f32>,
     /// parts rows of fine interreflected lux per W/m², then the coarse mean.
     indirect: Vec<f32>,
+    /// For a node whose interreflected rows are an ancestor's, their stated error per
+    /// sensor, lux per W/m² ([`indirect_ancestors`]); empty otherwise.
+    direction_err: Vec<f32>,
 }
 
 #[path = "cut_batch.rs"]
 mod cut_batch;
+#[path = "coefficient_budget.rs"]
+mod budget;
 #[path = "ground_sum.rs"]
 mod ground_sum;
+#[path = "indirect_ancestors.rs"]
+mod indirect_ancestors;
 #[path = "coefficient_sums.rs"]
 mod sums;
+pub use budget::adjoint_budget;
+use budget::{direction_bytes, scene_bytes};
 pub(super) use cut_batch::CutBatch;
 use sums::axpy;
 
@@ -143,7 +105,11 @@ pub struct CoefficientStats {
     pub nodes: usize,
     /// Sun-grid vertices the site's sun visits.
     pub sun_grid_vertices: usize,
-    /// Nodes and vertices whose interreflected coefficients were computed now.
+    /// Sky and ground nodes whose interreflected coefficients are their ancestor's at
+    /// [`super::config::Quality::indirect_depth`] (their direct light is their own).
+    pub indirect_from_ancestors: usize,
+    /// Nodes and vertices whose interreflected coefficients were computed now (the
+    /// ancestors among them).
     pub computed: usize,
     /// ... read from the cache.
     pub from_cache: usize,
@@ -256,7 +222,10 @@ impl Coefficients {
             ..CoefficientStats::default()
         };
         let parts = quality.transport.parts.max(2) as usize;
-        let list: Vec<Source> = wanted.into_values().collect();
+        let union: Vec<Source> = wanted.into_values().collect();
+        let plan = indirect_ancestors::plan(&union, quality.indirect_depth);
+        stats.indirect_from_ancestors = plan.deep.len();
+        let list = &plan.solved;
         // Grid vertices feed only the interreflection mesh (0.25 m² rows, not shadows on
         // sensors), so they are projected at the sky nodes' resolution.
         let res_of = |src: &Source| {
@@ -285,6 +254,7 @@ impl Coefficients {
                 Some(NodeData {
                     direct,
                     indirect: v,
+                    ..NodeData::default()
                 })
             })
             .collect();
@@ -322,8 +292,8 @@ impl Coefficients {
             let mut fresh: Vec<NodeData> = todo
                 .iter()
                 .map(|_| NodeData {
-                    direct: Vec::new(),
                     indirect: vec![0f32; (parts + 1) * k],
+                    ..NodeData::default()
                 })
                 .collect();
             for s0 in (0..k).step_by(block) {
@@ -368,24 +338,28 @@ impl Coefficients {
                 data[i] = Some(nd);
             }
         }
-        let nodes: HashMap<SourceKey, NodeData, ahash::RandomState> = list
-            .iter()
-            .zip(data)
-            .map(|(src, d)| {
-                let d = d.expect("every direction prepared");
-                (
-                    src.key,
-                    if values_only {
-                        d.values_only(parts, k)
-                    } else {
-                        d
-                    },
-                )
-            })
+        let solved: Vec<NodeData> = data
+            .into_iter()
+            .map(|d| d.expect("every direction prepared"))
             .collect();
+        let deep = indirect_ancestors::deep_direct(scene, dirs, hash, &plan.deep, res_of);
+        let nodes: HashMap<SourceKey, NodeData, ahash::RandomState> =
+            indirect_ancestors::assemble(&union, list, solved, &deep, parts)
+                .into_iter()
+                .map(|(key, d)| {
+                    (
+                        key,
+                        if values_only {
+                            d.values_only(parts, k)
+                        } else {
+                            d
+                        },
+                    )
+                })
+                .collect();
         stats.bytes = nodes
             .values()
-            .map(|n| 4 * (n.direct.len() + n.indirect.len()) as u64)
+            .map(|n| 4 * (n.direct.len() + n.indirect.len() + n.direction_err.len()) as u64)
             .sum();
         stats.seconds = t0.elapsed().as_secs_f64();
         let c = Coefficients {
@@ -422,6 +396,8 @@ impl Coefficients {
         let mut acc = vec![0f32; steps.len() * w];
         let mut csky = vec![0f32; steps.len() * k];
         let mut interp = vec![0f64; steps.len() * k];
+        // ... and the squared error of interreflected rows taken from ancestors.
+        let mut inherited = vec![0f64; steps.len() * k];
         let mut fine_uses: Vec<(SourceKey, usize, &Source)> = Vec::new();
         let mut coarse_uses: Vec<(SourceKey, usize, &Source)> = Vec::new();
         for (j, st) in steps.iter().enumerate() {
@@ -439,6 +415,11 @@ impl Coefficients {
                     axpy(refsum, l, &gs.direct);
                     axpy(unc, l, &gs.uncertainty);
                     axpy(ind, l, &gs.indirect);
+                    indirect_ancestors::add_err(
+                        &mut inherited[j * k..(j + 1) * k],
+                        l,
+                        &gs.direction_err,
+                    );
                 }
                 None => fine_uses.extend(ground.iter().map(|s| (s.key, j, *s))),
             }
@@ -476,6 +457,12 @@ impl Coefficients {
                     &nd.indirect,
                     weights,
                 );
+                let e = weights.irradiance;
+                indirect_ancestors::add_err(
+                    &mut inherited[j * k..(j + 1) * k],
+                    e,
+                    &nd.direction_err,
+                );
             }
         }
         sums::sort_uses(&mut coarse_uses);
@@ -494,6 +481,7 @@ impl Coefficients {
             .map(|(j, st)| {
                 let (acc, csky) = (&acc[j * w..(j + 1) * w], &csky[j * k..(j + 1) * k]);
                 let interp = interp[j * k..(j + 1) * k].to_vec();
+                let inherited = &inherited[j * k..(j + 1) * k];
                 let values = (0..k)
                     .map(|s| {
                         let sky = acc[s] as f64;
@@ -528,7 +516,7 @@ impl Coefficients {
                             from_lux(acc[(3 + p) * k + s] as f64),
                         );
                         let mut v = SensorValue::estimate(&fine, &coarse, &ind, iteration_rel);
-                        v.lux_err += interp[s];
+                        v.lux_err += interp[s] + inherited[s].sqrt();
                         v
                     })
                     .collect();

@@ -73,6 +73,7 @@ impl super::NodeData {
         super::NodeData {
             direct,
             indirect: mean,
+            direction_err: Vec::new(),
         }
     }
 }

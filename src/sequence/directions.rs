@@ -275,6 +275,17 @@ impl<'a> Directions<'a> {
             }
             _ => DirectionRecord::default(),
         };
+        let (sensors, rays) = self.responses(source);
+        DirectionData {
+            record,
+            sensors,
+            rays,
+        }
+    }
+
+    /// The sensors' responses to one source, computed now (no projection, no cache), and
+    /// the rays they took: for nodes whose direct light is all a run needs of them.
+    pub fn responses(&self, source: &Source) -> (Vec<NodeResponse>, u64) {
         let mut rays = 0;
         let sensors = self
             .scene
@@ -310,11 +321,7 @@ impl<'a> Directions<'a> {
                 }
             })
             .collect();
-        DirectionData {
-            record,
-            sensors,
-            rays,
-        }
+        (sensors, rays)
     }
 
     /// A cached record, or `None` (counted as a rebuild by the store's validation when it

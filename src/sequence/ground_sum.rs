@@ -19,6 +19,9 @@ pub(super) struct GroundSum {
     pub uncertainty: Vec<f32>,
     /// parts + 1 rows: Σ over nodes of solid angle (sr) × interreflected lux per W/m².
     pub indirect: Vec<f32>,
+    /// Σ over nodes of solid angle × the stated error of interreflected rows taken from
+    /// ancestors (lux per W/m²; empty when no node takes them).
+    pub direction_err: Vec<f32>,
 }
 
 /// Ground sums already made, by the cut's ground nodes in order: fine (all rows) and
@@ -98,10 +101,17 @@ impl Coefficients {
                 )
             })
             .collect();
+        let direction_err = if nodes.iter().all(|(nd, _)| nd.direction_err.is_empty()) {
+            Vec::new()
+        } else {
+            let errs = nodes.iter().filter(|(nd, _)| !nd.direction_err.is_empty());
+            sum_rows(k, errs.map(|(nd, w)| (*w, nd.direction_err.as_slice())))
+        };
         let s = Arc::new(GroundSum {
             direct,
             uncertainty,
             indirect,
+            direction_err,
         });
         self.ground
             .fine
