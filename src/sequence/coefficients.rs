@@ -20,6 +20,9 @@
 //!   the largest difference between the interpolated value and a corner's value, per
 //!   sensor, and added to `lux_err`: the true value of a function monotone across the
 //!   cell lies within its corners' range.
+//! * **Deep nodes.** A node deeper than [`super::config::Quality::indirect_depth`]
+//!   takes its ancestor's interreflected coefficients, with a first-order error stated
+//!   ([`indirect_ancestors`]); its direct rows are its own.
 //! * **Grey.** Coefficients are illuminance, exact for grey sources (Perez skies, their
 //!   ground glow and the sun, which is what annual runs use).
 //! * **Cache.** A node's interreflected coefficients are a record keyed by the node, the
@@ -267,7 +270,9 @@ impl Coefficients {
             // every missing direction's mesh irradiance into its coefficients.
             // The operator only now: a run whose coefficients are all cached never reads it.
             let op: &Transport = op.get_or_insert_with(load_operator);
-            let coefficient_bytes = (list.len() * k * (DIRECT_ROWS + parts + 1) * 4) as u64;
+            // The union's nodes, each with a row of stated error when it takes its
+            // ancestor's interreflection.
+            let coefficient_bytes = (union.len() * k * (DIRECT_ROWS + parts + 2) * 4) as u64;
             // A direction in flight per thread (applying) or the solves' scratch (solving).
             let threads = rayon::current_num_threads();
             let in_flight = (threads as u64

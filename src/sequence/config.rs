@@ -69,9 +69,9 @@ pub struct Quality {
     /// runs (daylight coefficients), degrees ([`crate::sources::SunGrid`]).
     pub sun_grid_deg: f64,
     /// Depth of the sky and ground nodes whose interreflected light annual runs compute
-    /// (daylight coefficients): a deeper node takes its ancestor's at this depth, with
-    /// the difference to the next coarser ancestor stated as error. Interreflection is
-    /// smooth in direction; the cut refines for the direct light.
+    /// (daylight coefficients): a deeper node takes its ancestor's at this depth, and its
+    /// first-order change (from the slope to the ancestor's siblings) is stated as error.
+    /// Interreflection is smooth in direction; the cut refines for the direct light.
     pub indirect_depth: u32,
     /// LDI and refinement.
     pub projection: ProjectionParams,
