@@ -11,7 +11,8 @@
 //! stated error, sky part and whole steps alike.
 //!
 //! `DAYSTEP_COEFFICIENTS_FULL=1` runs it on every sensor of the office at `default`
-//! (minutes; for the closing figures); CI runs every 11th sensor at `draft`.
+//! (minutes; for the closing figures), and with `DAYSTEP_COEFFICIENTS_SCENE=scene.toml`
+//! on another scene; CI runs every 11th sensor of the office at `draft`.
 
 use chrono::{Datelike, Duration, NaiveDate};
 use daystep::cache::Store;
@@ -76,7 +77,11 @@ fn daylight_coefficients_equal_forward_solves_within_their_stated_errors() {
     let every = std::env::var("DAYSTEP_COEFFICIENTS_EVERY")
         .ok()
         .and_then(|v| v.parse().ok());
-    let scene = office(d.path(), every.unwrap_or(if full { 1 } else { 11 }));
+    // `DAYSTEP_COEFFICIENTS_SCENE=scene.toml`: another scene (all its sensors).
+    let scene = match std::env::var_os("DAYSTEP_COEFFICIENTS_SCENE") {
+        Some(p) => Scene::load(Path::new(&p)).unwrap(),
+        None => office(d.path(), every.unwrap_or(if full { 1 } else { 11 })),
+    };
     let weather =
         read_weather(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office/weather.epw"))
             .unwrap();
