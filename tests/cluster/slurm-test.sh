@@ -299,8 +299,12 @@ until_state "$merge" COMPLETED
 check_study "$study" "$array"
 t_recipe=$SECONDS
 say "shards (job $array, 1-$shards) and merge (job $merge) done $((t_recipe - t_prime)) s after priming"
+# A shard reads the primed operator, or needs none: every coefficient it sums was cached
+# (by the priming job or a sibling shard), or its new nodes take their ancestors'
+# interreflection and need only sensor rays. It never builds one.
 for ((k = 1; k <= shards; k++)); do
-  grep -q '"operator_from_cache": *true' "$ROOT/runs/$study/shard-$k/report.json" ||
+  r="$ROOT/runs/$study/shard-$k/report.json"
+  grep -q '"operator_from_cache": *true' "$r" || grep -q '"operator_needed": *false' "$r" ||
     fail "shard $k built the interreflection operator itself: the priming job did not fill the cache"
 done
 field() { # JOB NAME → the job's NAME=value
