@@ -158,17 +158,36 @@ impl Hierarchy {
 /// the set of split elements alone (every split adds three leaves), without the arena's
 /// vertices. For a step whose element count is reported but whose elements nobody reads.
 pub fn union_leaf_count(triangles: usize, keys: impl Iterator<Item = ElementKey>) -> usize {
-    let mut split: std::collections::HashSet<ElementKey, ahash::RandomState> = Default::default();
-    for key in keys {
-        let mut k = key;
-        while let Some(p) = k.parent() {
-            if !split.insert(p) {
-                break;
+    let mut u = LeafUnion::default();
+    u.add(keys);
+    u.leaf_count(triangles)
+}
+
+/// [`union_leaf_count`] fed a batch of keys at a time: a step that streams its
+/// directions counts their elements without holding every direction's leaves.
+#[derive(Default)]
+pub struct LeafUnion {
+    split: std::collections::HashSet<ElementKey, ahash::RandomState>,
+}
+
+impl LeafUnion {
+    /// Adds the refinements that make the elements `keys` exist.
+    pub fn add(&mut self, keys: impl Iterator<Item = ElementKey>) {
+        for key in keys {
+            let mut k = key;
+            while let Some(p) = k.parent() {
+                if !self.split.insert(p) {
+                    break;
+                }
+                k = p;
             }
-            k = p;
         }
     }
-    triangles + 3 * split.len()
+
+    /// Leaves of the union so far over `triangles` roots.
+    pub fn leaf_count(&self, triangles: usize) -> usize {
+        triangles + 3 * self.split.len()
+    }
 }
 
 #[cfg(test)]
@@ -219,5 +238,10 @@ mod tests {
         }
         assert_eq!(h.leaf_count(), 3 + 3 * 5);
         assert_eq!(union_leaf_count(3, keys.into_iter()), h.leaf_count());
+        // Fed in two batches, in another order: the same union.
+        let mut u = LeafUnion::default();
+        u.add(keys[3..].iter().copied());
+        u.add(keys[..3].iter().rev().copied());
+        assert_eq!(u.leaf_count(3), h.leaf_count());
     }
 }

@@ -2,8 +2,10 @@
 //! its parallel beam reaches, with what weight) and every sensor's geometry-only response
 //! to it. Both depend on geometry, glazing, sensors and parameters only, so they are read
 //! from the on-disk cache ([`crate::cache`]) when present and computed and stored
-//! otherwise; within a run they are also kept in memory, so a sequence computes each
-//! direction once.
+//! otherwise. Within a run a projected direction is also kept in memory from its second
+//! use, so a sequence computes a recurring direction at most twice (once, when the disk
+//! cache is on) and a single step keeps none: an instant's 752 directions held 310 MB of
+//! leaves on the generated building.
 
 use super::config::Quality;
 use crate::cache::{self, MappedRecord, RecordKey, SceneHash, Section, Store, FIRST_USER_TAG};
@@ -14,7 +16,7 @@ use crate::sensors::{node_response, sun_response, NodeResponse};
 use crate::sources::{Source, SourceKey};
 use crate::trace::Tracer;
 use rayon::prelude::*;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
@@ -56,6 +58,13 @@ pub struct DirectionCounts {
     pub reused: u64,
 }
 
+/// Directions kept in a run's memory, and those met once (kept from their next use).
+#[derive(Default)]
+struct Memo {
+    kept: HashMap<(SourceKey, u32), Arc<DirectionData>, ahash::RandomState>,
+    seen: HashSet<(SourceKey, u32), ahash::RandomState>,
+}
+
 /// The per-direction data of one scene and quality, cached on disk and in memory.
 pub struct Directions<'a> {
     scene: &'a Scene,
@@ -67,7 +76,7 @@ pub struct Directions<'a> {
     store: &'a Store,
     hash: SceneHash,
     quality: Quality,
-    memo: Mutex<HashMap<(SourceKey, u32), Arc<DirectionData>, ahash::RandomState>>,
+    memo: Mutex<Memo>,
     built: AtomicU64,
     from_cache: AtomicU64,
     reused: AtomicU64,
@@ -121,7 +130,7 @@ impl<'a> Directions<'a> {
             store,
             hash: cache::scene_hash(scene, &quality.projection, &extra),
             quality: *quality,
-            memo: Mutex::new(HashMap::default()),
+            memo: Mutex::new(Memo::default()),
             built: AtomicU64::new(0),
             from_cache: AtomicU64::new(0),
             reused: AtomicU64::new(0),
@@ -193,17 +202,27 @@ impl<'a> Directions<'a> {
             .collect()
     }
 
-    /// The data of one source at LDI resolution `resolution`.
+    /// The data of one source at LDI resolution `resolution`: kept in this run's memory
+    /// from its second request (sensors-only directions, which hold no projection, from
+    /// their first).
     pub fn get(&self, source: &Source, resolution: u32) -> Arc<DirectionData> {
         let id = (source.key, resolution);
-        if let Some(d) = self.memo.lock().expect("memo lock").get(&id) {
-            self.reused.fetch_add(1, Ordering::Relaxed);
-            return d.clone();
-        }
+        let keep = {
+            let mut m = self.memo.lock().expect("memo lock");
+            if let Some(d) = m.kept.get(&id) {
+                self.reused.fetch_add(1, Ordering::Relaxed);
+                return d.clone();
+            }
+            self.pscene.is_none() || !m.seen.insert(id)
+        };
         let data = Arc::new(self.fetch(source, resolution));
+        if !keep {
+            return data;
+        }
         self.memo
             .lock()
             .expect("memo lock")
+            .kept
             .entry(id)
             .or_insert(data)
             .clone()
@@ -390,4 +409,51 @@ fn flatten(sensors: &[NodeResponse], sun: bool) -> Vec<f64> {
         flat.extend_from_slice(&n.uncertainty);
     }
     flat
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::synthetic::{Face, Rect, SceneBuilder};
+    use crate::sources::{node_source, SkyNodeKey};
+    use glam::DVec3;
+
+    /// A projected direction is computed at its first two uses and kept from the second;
+    /// a sensors-only one (no leaves to hold) is kept from the first.
+    #[test]
+    fn a_projected_direction_is_kept_from_its_second_use() {
+        let mut b = SceneBuilder::new();
+        let m = b.add_opaque("floor", 0.5);
+        b.add_rect(
+            "floor",
+            m,
+            Face::from_axis(2, true),
+            0.0,
+            Rect::new([0.0, 2.0], [0.0, 2.0]),
+        );
+        b.add_sensor(DVec3::new(1.0, 1.0, 0.5), DVec3::Z);
+        let scene = b.build("one floor").unwrap();
+        let q = Quality::preset("draft").unwrap();
+        let store = Store::disabled();
+        let tracer = Arc::new(Tracer::new(&scene));
+        let src = node_source(SkyNodeKey::root(0));
+        let res = q.projection.resolution_for(false);
+        let count = |d: &Directions| {
+            let c = d.counts();
+            (c.built, c.reused)
+        };
+        let dirs = Directions::new(&scene, &q, &store, tracer.clone());
+        let first = dirs.get(&src, res);
+        assert!(!first.record.leaves.is_empty(), "the node lights the floor");
+        assert_eq!(count(&dirs), (1, 0), "computed, not kept");
+        dirs.get(&src, res);
+        assert_eq!(count(&dirs), (2, 0), "computed again, kept");
+        let third = dirs.get(&src, res);
+        assert_eq!(count(&dirs), (2, 1), "from memory");
+        assert_eq!(third.record.leaves.len(), first.record.leaves.len());
+        let coarse = Directions::sensors_only(&scene, &q, &store, tracer);
+        coarse.get(&src, res);
+        coarse.get(&src, res);
+        assert_eq!(count(&coarse), (1, 1));
+    }
 }

@@ -18,7 +18,7 @@
 
 use super::coefficients::{Coefficients, CutBatch};
 use super::config::{Quality, SkySpec};
-use super::direct::{add_mesh_irradiance, sensors_from_responses, MeshMemo, MeshWeights};
+use super::direct::{sensors_from_responses, MeshMemo};
 use super::directions::{DirectionData, Directions};
 use super::estimate::{SensorValue, ERROR_MODEL};
 use super::report::{Report, StageTimes, SunReport};
@@ -26,10 +26,8 @@ use super::sky::{build_sky, sources_for, SkySources};
 use super::surfaces::SurfaceMap;
 use crate::cache::Store;
 use crate::error::Result;
-use crate::hierarchy::Hierarchy;
 use crate::memory::StagePeaks;
 use crate::photometry::Rgb;
-use crate::projection::DirectionRecord;
 use crate::radiosity::TransportState;
 use crate::radiosity::{Transport, TransportSensor};
 use crate::scene::Scene;
@@ -37,15 +35,14 @@ use crate::site::solar_position::solar_position;
 use crate::sky::Sky;
 use crate::sources::Source;
 use crate::trace::Tracer;
-use crate::transfer;
 use chrono::Datelike;
-use notes::{count_sources, note_errors};
-use rayon::prelude::*;
+use notes::note_errors;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 mod notes; // what a step's report says: counts, skipped work, the largest errors
 mod by_coefficients; // stages 3–7 of several steps at once by daylight coefficients
+mod direct_pass; // stages 3–4 of a forward step, a block of directions at a time
 mod sun; // the sensors' direct sun from the snapped sun's cached responses
 
 pub use super::step_types::{EngineOptions, Step, StepTime};
@@ -460,31 +457,21 @@ impl<'a> Engine<'a> {
         let mut times = std::mem::take(&mut report.stage_seconds);
         self.note_sources(s, &mut report);
         let sources = s.sources.clone();
-        // 3. Directions: projections and sensor responses, cached.
-        let data = times.time("directions", || self.dirs.get_all(&sources));
-        let records: Vec<&DirectionRecord> = data.iter().map(|d| &d.record).collect();
-        count_sources(&sources, &records, self.scene, &mut report.counts);
-        // 4. Direct transfer: the refined elements when asked; the mesh in stage 5.
-        let elements = match (detail, self.opts.count_elements_only) {
-            (false, _) => None,
-            (true, true) => {
-                report.counts.elements_after = times.time("transfer", || {
-                    let keys = records.iter().flat_map(|r| r.leaves.iter().map(|l| l.key));
-                    crate::hierarchy::union_leaf_count(self.scene.triangles.len(), keys)
-                });
-                None
-            }
-            (true, false) => Some(times.time("transfer", || {
-                let mut h = Hierarchy::new(self.scene);
-                let d = transfer::transfer(&mut h, &sources, &records);
-                report.counts.elements_after = h.leaf_count();
-                (h, d)
-            })),
-        };
+        // 3–4. Directions (projections and sensor responses, cached) and the direct
+        // transfer onto the mesh, streamed; the refined elements when asked.
+        let pass = self.direct_pass(&sources, detail, &mut times, &mut report);
         // 5. Interreflection.
-        let light = self.interreflect(&sources, &data, previous, dni_dhi, &mut times, &mut report);
+        let light = self.interreflect(
+            &sources,
+            pass.mesh,
+            previous,
+            dni_dhi,
+            &mut times,
+            &mut report,
+        );
         // 6–7. Sensors and their stated error.
-        let sensors = self.sensor_values(sky, &sources, &data, &light, &mut times, &mut report);
+        let sensors =
+            self.sensor_values(sky, &sources, &pass.data, &light, &mut times, &mut report);
         report.warnings.extend(sky.warnings.iter().cloned());
         let dc = self.dirs.counts();
         report.counts.ldis_built = dc.built as usize;
@@ -496,7 +483,7 @@ impl<'a> Engine<'a> {
             surfaces: light.surfaces,
             sky: None,
             sources,
-            elements,
+            elements: pass.elements,
             sun_interpolation_err: Vec::new(),
             mesh_direct: light.mesh_direct,
             report,
@@ -508,7 +495,7 @@ impl<'a> Engine<'a> {
     fn interreflect(
         &self,
         sources: &[Source],
-        data: &[Arc<DirectionData>],
+        mesh: Option<(Vec<Rgb>, Option<Vec<Rgb>>)>,
         previous: Option<&TransportState>,
         dni_dhi: Option<(f64, f64)>,
         times: &mut StageTimes,
@@ -518,7 +505,7 @@ impl<'a> Engine<'a> {
         let mut out = Interreflected::default();
         match &self.operator {
             Some(op) => {
-                let (e, et) = times.time("transfer_mesh", || self.mesh_direct(op, sources, data));
+                let (e, et) = mesh.expect("the mesh's direct light where there is an operator");
                 let (next, rep) = times.time("interreflection", || op.solve(&e, previous));
                 if let (Some(m), Some(et)) = (&self.surfaces, et) {
                     let sin_alt = report.sun.altitude_deg.to_radians().sin();
@@ -585,37 +572,5 @@ impl<'a> Engine<'a> {
             .collect();
         note_errors(&values, report);
         values
-    }
-
-    /// The direct irradiance of the operator's mesh rows (RGB W/m²) and, with surface
-    /// output, the irradiance transmitted through its glazing: the sources' mesh weights
-    /// (memoised) computed in parallel a block at a time and summed in source order, so
-    /// that only a block's weights are held at once and the sums do not depend on it.
-    fn mesh_direct(
-        &self,
-        op: &Transport,
-        sources: &[Source],
-        data: &[Arc<DirectionData>],
-    ) -> (Vec<Rgb>, Option<Vec<Rgb>>) {
-        let block = 8 * rayon::current_num_threads().max(1);
-        let mut e = vec![Rgb::ZERO; op.rows()];
-        let mut et = self.surfaces.as_ref().map(|_| vec![Rgb::ZERO; op.rows()]);
-        for (srcs, ds) in sources.chunks(block).zip(data.chunks(block)) {
-            let weights: Vec<MeshWeights> = srcs
-                .par_iter()
-                .zip(ds)
-                .map(|(src, d)| {
-                    let res = self.dirs.quality().projection.resolution_for(src.is_sun());
-                    self.mesh_memo.weights(self.scene, op, src, res, &d.record)
-                })
-                .collect();
-            add_mesh_irradiance(&mut e, srcs, &weights);
-            if let (Some(m), Some(et)) = (&self.surfaces, et.as_mut()) {
-                for (src, w) in srcs.iter().zip(&weights) {
-                    m.add_transmitted(et, src, w, self.scene);
-                }
-            }
-        }
-        (e, et)
     }
 }
