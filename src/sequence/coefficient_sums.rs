@@ -15,6 +15,17 @@ pub(super) struct Weights {
     pub irradiance: f32,
 }
 
+impl Weights {
+    /// The weights of the grey source `src`.
+    pub fn of(src: &crate::sources::Source) -> Weights {
+        Weights {
+            children: src.child_radiance.map(super::g),
+            node: super::g(src.radiance),
+            irradiance: super::g(src.normal_irradiance),
+        }
+    }
+}
+
 /// Adds a node's rows to a step's accumulators `acc` (sky, Σ L̂ × response sum,
 /// uncertainty, then `indirect.len()` of interreflected rows; `k` sensors each): `direct`
 /// holds its 4 children's responses, their sum and the children's 4 uncertainties. The

@@ -46,7 +46,7 @@ use crate::sources::{Source, SourceKey, SunGrid};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::HashMap;
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 /// Section tag of a coefficient record: (parts + 1) × sensors f32.
@@ -73,8 +73,9 @@ const BATCH: usize = 64;
 struct NodeData {
     /// [`DIRECT_ROWS`] rows (empty for sun-grid vertices).
     direct: Vec<f32>,
-    /// parts rows of fine interreflected lux per W/m², then the coarse mean.
-    indirect: Vec<f32>,
+    /// parts rows of fine interreflected lux per W/m², then the coarse mean; shared by
+    /// the nodes that take them from one ancestor ([`indirect_ancestors`]).
+    indirect: Arc<Vec<f32>>,
     /// For a node whose interreflected rows are an ancestor's, their stated error per
     /// sensor, lux per W/m² ([`indirect_ancestors`]); empty otherwise.
     direction_err: Vec<f32>,
@@ -158,6 +159,11 @@ pub(super) struct StepCuts<'a> {
 }
 
 /// The grey value of a grey RGB quantity.
+/// A step `j`'s use of the node `src`, with its weights, for [`sums::sort_uses`].
+fn use_of(j: usize, src: &Source) -> (SourceKey, usize, (&Source, sums::Weights)) {
+    (src.key, j, (src, sums::Weights::of(src)))
+}
+
 fn g(v: Rgb) -> f32 {
     debug_assert!(
         (v.x - v.y).abs() <= 1e-9 * v.x.abs().max(1e-300)
@@ -256,7 +262,7 @@ impl Coefficients {
                 };
                 Some(NodeData {
                     direct,
-                    indirect: v,
+                    indirect: Arc::new(v),
                     ..NodeData::default()
                 })
             })
@@ -297,7 +303,7 @@ impl Coefficients {
             let mut fresh: Vec<NodeData> = todo
                 .iter()
                 .map(|_| NodeData {
-                    indirect: vec![0f32; (parts + 1) * k],
+                    indirect: Arc::new(vec![0f32; (parts + 1) * k]),
                     ..NodeData::default()
                 })
                 .collect();
@@ -323,7 +329,7 @@ impl Coefficients {
                     let vs = xb.apply_many(op, &terms);
                     for (nd, v) in outs.iter_mut().zip(vs) {
                         for row in 0..=parts {
-                            nd.indirect[row * k + s0..row * k + s0 + w]
+                            Arc::make_mut(&mut nd.indirect)[row * k + s0..row * k + s0 + w]
                                 .copy_from_slice(&v[row * w..(row + 1) * w]);
                         }
                     }
@@ -349,7 +355,7 @@ impl Coefficients {
             .collect();
         let deep = indirect_ancestors::deep_direct(scene, dirs, hash, &plan.deep, res_of);
         let nodes: HashMap<SourceKey, NodeData, ahash::RandomState> =
-            indirect_ancestors::assemble(&union, list, solved, &deep, parts)
+            indirect_ancestors::assemble(&union, list, solved, &plan.deep, deep, parts)
                 .into_iter()
                 .map(|(key, d)| {
                     (
@@ -362,9 +368,18 @@ impl Coefficients {
                     )
                 })
                 .collect();
+        // Interreflected rows shared by several nodes counted once.
+        let mut shared = std::collections::HashSet::new();
         stats.bytes = nodes
             .values()
-            .map(|n| 4 * (n.direct.len() + n.indirect.len() + n.direction_err.len()) as u64)
+            .map(|n| {
+                let ind = if shared.insert(Arc::as_ptr(&n.indirect)) {
+                    n.indirect.len()
+                } else {
+                    0
+                };
+                4 * (n.direct.len() + ind + n.direction_err.len()) as u64
+            })
             .sum();
         stats.seconds = t0.elapsed().as_secs_f64();
         let c = Coefficients {
@@ -403,8 +418,10 @@ impl Coefficients {
         let mut interp = vec![0f64; steps.len() * k];
         // ... and the squared error of interreflected rows taken from ancestors.
         let mut inherited = vec![0f64; steps.len() * k];
-        let mut fine_uses: Vec<(SourceKey, usize, &Source)> = Vec::new();
-        let mut coarse_uses: Vec<(SourceKey, usize, &Source)> = Vec::new();
+        // A node's weights are read here, in step order: read in the node-major sums
+        // below, each source was a cache miss (a third of the sums' own time).
+        let mut fine_uses: Vec<(SourceKey, usize, (&Source, sums::Weights))> = Vec::new();
+        let mut coarse_uses: Vec<(SourceKey, usize, (&Source, sums::Weights))> = Vec::new();
         for (j, st) in steps.iter().enumerate() {
             let acc = &mut acc[j * w..(j + 1) * w];
             // The ground glow, uniform, as one source ([`ground_sum`]); node by node
@@ -426,14 +443,14 @@ impl Coefficients {
                         &gs.direction_err,
                     );
                 }
-                None => fine_uses.extend(ground.iter().map(|s| (s.key, j, *s))),
+                None => fine_uses.extend(ground.iter().map(|s| use_of(j, s))),
             }
             for src in rest {
                 if src.is_sun() {
                     let interp = &mut interp[j * k..(j + 1) * k];
                     self.add_sun(src, &mut acc[3 * k..], Some(interp));
                 } else {
-                    fine_uses.push((src.key, j, src));
+                    fine_uses.push(use_of(j, src));
                 }
             }
             let (cground, crest) = ground_sum::split_ground(st.coarse);
@@ -442,19 +459,14 @@ impl Coefficients {
                     let d = self.coarse_ground_sum(&cground, |s| self.coarse_node(s, coarse_dirs));
                     axpy(&mut csky[j * k..(j + 1) * k], l, &d);
                 }
-                None => coarse_uses.extend(cground.iter().map(|s| (s.key, j, *s))),
+                None => coarse_uses.extend(cground.iter().map(|s| use_of(j, s))),
             }
-            coarse_uses.extend(crest.iter().filter(|s| !s.is_sun()).map(|s| (s.key, j, *s)));
+            coarse_uses.extend(crest.iter().filter(|s| !s.is_sun()).map(|s| use_of(j, s)));
         }
         sums::sort_uses(&mut fine_uses);
         for uses in fine_uses.chunk_by(|a, b| a.0 == b.0) {
-            let nd = self.node(uses[0].2);
-            for &(_, j, src) in uses {
-                let weights = sums::Weights {
-                    children: src.child_radiance.map(g),
-                    node: g(src.radiance),
-                    irradiance: g(src.normal_irradiance),
-                };
+            let nd = self.node(uses[0].2 .0);
+            for &(_, j, (_, weights)) in uses {
                 sums::add_node(
                     &mut acc[j * w..(j + 1) * w],
                     k,
@@ -472,11 +484,11 @@ impl Coefficients {
         }
         sums::sort_uses(&mut coarse_uses);
         for uses in coarse_uses.chunk_by(|a, b| a.0 == b.0) {
-            let d = self.coarse_node(uses[0].2, coarse_dirs);
-            for &(_, j, src) in uses {
+            let d = self.coarse_node(uses[0].2 .0, coarse_dirs);
+            for &(_, j, (_, weights)) in uses {
                 let csky = &mut csky[j * k..(j + 1) * k];
                 for c in 0..4 {
-                    axpy(csky, g(src.child_radiance[c]), &d[c * k..(c + 1) * k]);
+                    axpy(csky, weights.children[c], &d[c * k..(c + 1) * k]);
                 }
             }
         }

@@ -72,7 +72,7 @@ impl super::NodeData {
         mean.iter_mut().for_each(|m| *m *= inv);
         super::NodeData {
             direct,
-            indirect: mean,
+            indirect: std::sync::Arc::new(mean),
             direction_err: Vec::new(),
         }
     }

@@ -112,7 +112,7 @@ pub(super) fn inherit(
     let scale = siblings.map(|(src, _)| (off / a.0.direction.angle_between(src.direction)) as f32);
     NodeData {
         direct,
-        indirect: a.1.indirect.clone(),
+        indirect: std::sync::Arc::clone(&a.1.indirect),
         direction_err: (0..k)
             .map(|s| {
                 let m = mean(a.1, s);
@@ -124,34 +124,33 @@ pub(super) fn inherit(
     }
 }
 
-/// The direct rows of the `deep` nodes (each with its ancestor and the ancestor's siblings),
-/// by key: from each node's coefficient record, or from sensor rays alone (no projection),
-/// then recorded. `res_of` gives a node's LDI resolution (part of its record's key).
+/// The direct rows of the `deep` nodes, in their order: from each node's coefficient
+/// record, or from sensor rays alone (no projection), then recorded. `res_of` gives a
+/// node's LDI resolution (part of its record's key).
 pub(super) fn deep_direct(
     scene: &Scene,
     dirs: &Directions,
     hash: SceneHash,
     deep: &[(Source, SourceKey, [SourceKey; 3])],
     res_of: impl Fn(&Source) -> u32 + Sync,
-) -> HashMap<SourceKey, (Vec<f32>, SourceKey, [SourceKey; 3]), ahash::RandomState> {
+) -> Vec<Vec<f32>> {
     let k = scene.sensors.len();
     let store = dirs.store();
     deep.par_iter()
-        .map(|(src, a, p)| {
+        .map(|(src, _, _)| {
             let key = record_key(hash, dirs, src, res_of(src));
             let cached = key.as_ref().and_then(|key| {
                 let r = store.get(key)?;
                 let d = r.section::<f32>(TAG_DIRECT).ok()?;
                 (d.len() == DIRECT_ROWS * k).then(|| d.to_vec())
             });
-            let direct = cached.unwrap_or_else(|| {
+            cached.unwrap_or_else(|| {
                 let d = direct_rows(&dirs.responses(src).0, k);
                 if let Some(key) = key.filter(|_| store.is_enabled()) {
                     store.put(&key, &cache::encode(&key, &[Section::of(TAG_DIRECT, &d)]));
                 }
                 d
-            });
-            (src.key, (direct, *a, *p))
+            })
         })
         .collect()
 }
@@ -165,29 +164,40 @@ pub(super) fn add_err(err: &mut [f64], a: f32, row: &[f32]) {
 }
 
 /// The union's nodes by key: a solved node's data (`solved`, in the order of `list`) as
-/// it is, a deep node's from its direct rows and ancestors ([`inherit`]).
+/// it is, a deep node's (`deep`, with its `direct` rows in the same order) from its own
+/// direct rows and its ancestors' interreflected ones ([`inherit`], shared, not copied).
 pub(super) fn assemble(
     union: &[Source],
     list: &[Source],
     solved: Vec<NodeData>,
-    deep: &HashMap<SourceKey, (Vec<f32>, SourceKey, [SourceKey; 3]), ahash::RandomState>,
+    deep: &[(Source, SourceKey, [SourceKey; 3])],
+    direct: Vec<Vec<f32>>,
     parts: usize,
 ) -> Vec<(SourceKey, NodeData)> {
-    let solved: HashMap<SourceKey, (&Source, NodeData)> = list
+    let mut solved: HashMap<SourceKey, (&Source, NodeData)> = list
         .iter()
         .zip(solved)
         .map(|(src, d)| (src.key, (src, d)))
         .collect();
-    let get = |k: &SourceKey| (solved[k].0, &solved[k].1);
+    let mut inherited: HashMap<SourceKey, NodeData> = {
+        let get = |k: &SourceKey| (solved[k].0, &solved[k].1);
+        deep.iter()
+            .zip(direct)
+            .map(|((src, a, sib), d)| {
+                (
+                    src.key,
+                    inherit(src, d, get(a), sib.map(|k| get(&k)), parts),
+                )
+            })
+            .collect()
+    };
     union
         .iter()
         .map(|src| {
-            let d = match deep.get(&src.key) {
-                Some((direct, a, sib)) => {
-                    inherit(src, direct.clone(), get(a), sib.map(|k| get(&k)), parts)
-                }
-                None => solved[&src.key].1.clone(),
-            };
+            let d = inherited
+                .remove(&src.key)
+                .or_else(|| solved.remove(&src.key).map(|(_, d)| d))
+                .expect("a union node is solved or inherits");
             (src.key, d)
         })
         .collect()
