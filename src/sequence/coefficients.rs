@@ -158,12 +158,12 @@ pub(super) struct StepCuts<'a> {
     pub sun_coarse: &'a [f64],
 }
 
-/// The grey value of a grey RGB quantity.
 /// A step `j`'s use of the node `src`, with its weights, for [`sums::sort_uses`].
 fn use_of(j: usize, src: &Source) -> (SourceKey, usize, (&Source, sums::Weights)) {
     (src.key, j, (src, sums::Weights::of(src)))
 }
 
+/// The grey value of a grey RGB quantity.
 fn g(v: Rgb) -> f32 {
     debug_assert!(
         (v.x - v.y).abs() <= 1e-9 * v.x.abs().max(1e-300)
