@@ -33,7 +33,15 @@ pub struct Mesh {
     /// both ways), `u32::MAX` where there is none. Both faces are split alike, so their
     /// leaves pair up exactly.
     twin_row: Vec<u32>,
+    /// Per element of `hierarchy`: its first child's index, or for a leaf its row with
+    /// [`LEAF`] set. One `u32` a level keeps a point's descent to its row (once per
+    /// line and surface crossing in the operator's build) in cache, where each
+    /// [`crate::hierarchy::Element`] is 112 bytes.
+    descent: Vec<u32>,
 }
+
+/// Marks a [`Mesh`] descent entry as a leaf's row.
+const LEAF: u32 = 1 << 31;
 
 /// Largest far element (outside the region of interest) per squared distance from the
 /// region, m²/m²: an element's edge is then about half its distance.
@@ -128,6 +136,17 @@ impl Mesh {
                 *coarse_id.entry(c).or_insert(n)
             })
             .collect();
+        assert!(
+            h.elements.len() < LEAF as usize,
+            "mesh of {} elements",
+            h.elements.len()
+        );
+        let descent: Vec<u32> = h
+            .elements
+            .iter()
+            .zip(&row_of)
+            .map(|(e, &row)| e.first_child.unwrap_or(row | LEAF))
+            .collect();
         let mut twin_row = vec![u32::MAX; elements.len()];
         for (r, &e) in elements.iter().enumerate() {
             let el = &h.elements[e as usize];
@@ -137,7 +156,7 @@ impl Mesh {
                 Some(&f) if f != u32::MAX && (f as usize) < tri => {
                     let c = (el.vertices[0] + el.vertices[1] + el.vertices[2]) / 3.0;
                     let b = barycentric(scene.triangles[f as usize].v, c);
-                    let fr = descend(&h, &row_of, f, b);
+                    let fr = descend(&descent, f, b);
                     twin_row[r] = fr;
                     twin_row[fr as usize] = r as u32;
                 }
@@ -146,6 +165,7 @@ impl Mesh {
         }
         Mesh {
             twin_row,
+            descent,
             region,
             max_area,
             coarse_rows: coarse_id.len(),
@@ -159,7 +179,7 @@ impl Mesh {
 
     /// Row containing the point with barycentrics `bary` on input triangle `tri`.
     pub fn row_at(&self, tri: u32, bary: [f64; 3]) -> u32 {
-        descend(&self.hierarchy, &self.row_of, tri, bary)
+        descend(&self.descent, tri, bary)
     }
 
     /// The row of the same element on the opposite face of `row`'s triangle, if it has one.
@@ -210,14 +230,18 @@ impl Mesh {
     }
 }
 
-/// The leaf row of `h` under triangle `tri` containing barycentrics `bary`.
-fn descend(h: &Hierarchy, row_of: &[u32], tri: u32, bary: [f64; 3]) -> u32 {
+/// The leaf row under triangle `tri` containing barycentrics `bary`, by [`Mesh`]'s
+/// `descent` table.
+fn descend(descent: &[u32], tri: u32, bary: [f64; 3]) -> u32 {
     let mut i = tri;
     let mut b = bary;
-    while let Some(fc) = h.elements[i as usize].first_child {
-        i = fc + child_of(&mut b) as u32;
+    loop {
+        let step = descent[i as usize];
+        if step & LEAF != 0 {
+            return step & !LEAF;
+        }
+        i = step + child_of(&mut b) as u32;
     }
-    row_of[i as usize]
 }
 
 #[cfg(test)]
