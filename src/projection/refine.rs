@@ -24,6 +24,17 @@ struct Coverage {
     t_sum: Rgb,
 }
 
+impl Coverage {
+    /// Counts one covered pixel whose line arrives with transmission `t`.
+    fn add(&mut self, t: Rgb) {
+        self.n_p += 1;
+        if t.max_element() > 0.0 {
+            self.n_v += 1;
+        }
+        self.t_sum += t;
+    }
+}
+
 /// Coverage of the element `v` of triangle `faces[0]` (`faces[1]`: its other face).
 fn coverage(ldi: &Ldi, faces: [u32; 2], v: &[DVec3; 3]) -> Coverage {
     let tri = faces[0];
@@ -38,11 +49,7 @@ fn coverage(ldi: &Ldi, faces: [u32; 2], v: &[DVec3; 3]) -> Coverage {
             // triangle's own samples; fall back to the line itself.
             None => ldi.transmission_at(i, j, z, faces),
         };
-        c.n_p += 1;
-        if t.max_element() > 0.0 {
-            c.n_v += 1;
-        }
-        c.t_sum += t;
+        c.add(t);
     });
     c
 }
@@ -57,12 +64,7 @@ fn whole_coverages(ldi: &Ldi, triangles: usize) -> Vec<Coverage> {
     let mut out = vec![Coverage::default(); triangles];
     for f in ldi.fragments() {
         let t = Rgb::new(f.t_in[0] as f64, f.t_in[1] as f64, f.t_in[2] as f64);
-        let c = &mut out[f.tri as usize];
-        c.n_p += 1;
-        if t.max_element() > 0.0 {
-            c.n_v += 1;
-        }
-        c.t_sum += t;
+        out[f.tri as usize].add(t);
     }
     out
 }
