@@ -59,6 +59,14 @@ done
 
 # --- the daemons, from one temporary folder ---
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/daystep-slurm.XXXXXX")
+# The cluster's state, the sample's runs and caches take ~400 MB. A full disk does not stop
+# slurmctld, it only leaves jobs pending (seen in CI), so refuse to start without room.
+need_mb=1024
+free_mb=$(df -Pm "$tmp" | awk 'NR == 2 { print $4 }')
+if ((free_mb < need_mb)); then
+  rmdir "$tmp"
+  fail "only ${free_mb} MB free under ${tmp%/*} (needs ${need_mb} MB): $(df -Ph "${tmp%/*}" | tail -n 1)"
+fi
 chmod 755 "$tmp" # munged wants its socket's folders searchable by all
 declare -A pid=()
 stop_daemons() {
@@ -237,6 +245,9 @@ until_state() { # JOB STATE…: waits until the job is in one of the states; fai
       fail "job $job is $s (waited for $*)"
       ;;
     esac
+    if grep -qs 'No space left on device' "$tmp"/slurmctld.log "$tmp"/slurmd.log; then
+      fail "the disk is full ($(df -Ph "$tmp" | tail -n 1)); job $job is ${s:-unknown}"
+    fi
     ((SECONDS < deadline)) || fail "job $job is still ${s:-unknown} after ${timeout} s (waited for $*)"
     sleep 0.2
   done
