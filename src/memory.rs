@@ -32,25 +32,8 @@ impl MemoryCap {
     /// # Errors
     /// Text that is not a size, or a size under 1 MiB ([`Error::Input`]).
     pub fn parse(text: &str) -> Result<MemoryCap> {
-        let bytes = parse_size::Config::new()
-            .with_binary()
-            .parse_size(text.trim())
-            .map_err(|e| {
-                Error::arg(
-                    "--max-memory",
-                    text,
-                    format!("{e}: give a size such as 4G, 800M or 1.5G (binary units)"),
-                )
-            })?;
-        if bytes < 1 << 20 {
-            return Err(Error::arg(
-                "--max-memory",
-                text,
-                format!("{bytes} bytes is less than 1 MiB"),
-            ));
-        }
         Ok(MemoryCap {
-            bytes,
+            bytes: parse_size_flag("--max-memory", text)?,
             from: format!("--max-memory {}", text.trim()),
         })
     }
@@ -84,6 +67,33 @@ impl MemoryCap {
     pub fn from_arg(arg: Option<&str>) -> Result<MemoryCap> {
         arg.map_or_else(|| Ok(MemoryCap::machine_default()), MemoryCap::parse)
     }
+}
+
+/// A size flag's value (`--max-memory`, `--cache-size`), bytes: a number with an optional
+/// binary suffix, as Slurm's `--mem` reads it (`4G` = 4 GiB, `800M`, `1.5G`, `512K`, plain
+/// bytes; `B`, `iB` and lower case are accepted).
+///
+/// # Errors
+/// Text that is not a size, or a size under 1 MiB ([`Error::Input`] naming `flag`).
+pub fn parse_size_flag(flag: &str, text: &str) -> Result<u64> {
+    let bytes = parse_size::Config::new()
+        .with_binary()
+        .parse_size(text.trim())
+        .map_err(|e| {
+            Error::arg(
+                flag,
+                text,
+                format!("{e}: give a size such as 4G, 800M or 1.5G (binary units)"),
+            )
+        })?;
+    if bytes < 1 << 20 {
+        return Err(Error::arg(
+            flag,
+            text,
+            format!("{bytes} bytes is less than 1 MiB"),
+        ));
+    }
+    Ok(bytes)
 }
 
 /// Peak resident memory per stage of one run. While a stage runs, a sampling thread reads

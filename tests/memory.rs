@@ -145,3 +145,54 @@ fn the_binary_reads_the_cap_refuses_a_bad_one_and_reports_it() {
         assert!(m["peak_bytes"].as_u64().unwrap() > 1 << 20, "{m}");
     }
 }
+
+/// `--cache-size`: a bad value is refused before any work, naming the flag; a run whose
+/// records outgrow the limit warns, on standard error and in its report.
+#[test]
+fn the_cache_size_is_read_refused_when_bad_and_outgrowing_it_warns() {
+    let d = tempfile::tempdir().unwrap();
+    let o = office();
+    let run = |size: &str, out: &str| {
+        let (cache, out) = (d.path().join("cache"), d.path().join(out));
+        let a = [
+            "--cache-size",
+            size,
+            "instant",
+            o.to_str().unwrap(),
+            "--time",
+            "2021-06-15T12:30",
+            "--sky",
+            "cie-overcast",
+            "--dhi",
+            "100",
+            "--quality",
+            "draft",
+            "--cache",
+            cache.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        (daystep(&a), out)
+    };
+    for bad in ["banana", "512K"] {
+        let (r, out) = run(bad, "bad");
+        assert_eq!(r.status.code(), Some(1), "{bad}: {}", stderr(&r));
+        assert!(stderr(&r).contains("--cache-size"), "{bad}: {}", stderr(&r));
+        assert!(!out.exists(), "{bad}: refused before any work");
+    }
+    let (r, out) = run("2G", "roomy");
+    assert_eq!(r.status.code(), Some(0), "{}", stderr(&r));
+    assert!(!stderr(&r).contains("--cache-size"), "{}", stderr(&r));
+    // The draft office writes tens of MiB of records: 1 MiB keeps few of them.
+    std::fs::remove_dir_all(d.path().join("cache")).unwrap();
+    let (r, out_small) = run("1M", "small");
+    assert_eq!(r.status.code(), Some(0), "{}", stderr(&r));
+    assert!(stderr(&r).contains("--cache-size"), "{}", stderr(&r));
+    let report = std::fs::read_to_string(out_small.join("report.json")).unwrap();
+    assert!(report.contains("--cache-size"), "{report}");
+    // The limit changes what is kept, never what is computed.
+    assert_eq!(
+        std::fs::read(out.join("sensors.csv")).unwrap(),
+        std::fs::read(out_small.join("sensors.csv")).unwrap()
+    );
+}

@@ -415,6 +415,24 @@ impl Store {
         if more_failed > 0 {
             w.push(format!("cache: {more_failed} more record writes failed"));
         }
+        // Eviction keeps the folder at 90 % of the limit: a run that writes more than that
+        // removed some of its own records, which it (or its next block, or the next run)
+        // computes again.
+        let written = self.bytes_written.load(Relaxed);
+        let evicted = self.evictions.load(Relaxed);
+        if evicted > 0 && written > self.max_bytes - self.max_bytes / 10 {
+            let size = |b: u64| match b as f64 / (1u64 << 20) as f64 {
+                m if m < 1024.0 => format!("{m:.1} MiB"),
+                m => format!("{:.2} GiB", m / 1024.0),
+            };
+            w.push(format!(
+                "cache: this run wrote {} of records, more than the folder's limit ({}) \
+                 keeps, and {evicted} records were removed; some may be computed again: a \
+                 larger --cache-size keeps them",
+                size(written),
+                size(self.max_bytes)
+            ));
+        }
         w
     }
 
@@ -444,6 +462,27 @@ mod tests {
             direction: d,
             resolution: 64,
         }
+    }
+
+    #[test]
+    fn a_run_that_outgrows_the_limit_says_so() {
+        let dir = tempfile::tempdir().unwrap();
+        let c = dir.path().join("c");
+        let bytes = |d: u64| encode(&key(d), &[Section::f64s(300, &[d as f64; 64])]);
+        let size = bytes(0).len() as u64;
+        let roomy = Store::open(&c, 10 * size);
+        for d in 0..5 {
+            roomy.put(&key(d), &bytes(d));
+        }
+        assert!(roomy.warnings().is_empty(), "{:?}", roomy.warnings());
+        drop(roomy);
+        let small = Store::open(&c, 4 * size);
+        for d in 10..15 {
+            small.put(&key(d), &bytes(d));
+        }
+        let w = small.warnings();
+        assert!(small.stats().evictions > 0);
+        assert!(w.iter().any(|w| w.contains("--cache-size")), "{w:?}");
     }
 
     #[test]

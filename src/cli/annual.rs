@@ -5,7 +5,6 @@ use super::args::AnnualArgs;
 use super::config;
 use super::messages::{note, warnings};
 use crate::error::{Error, Result};
-use crate::memory::MemoryCap;
 use crate::sequence::annual::{AnnualOptions, RunControl};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -51,7 +50,7 @@ pub(super) fn show_progress(bar: Option<&indicatif::ProgressBar>, done: usize, t
 /// # Errors
 /// Bad arguments, scene or weather file ([`Error::Input`]), unwritable output;
 /// [`Error::Interrupted`] after Ctrl-C, once the finished days are written.
-pub fn run(a: AnnualArgs, cap: &MemoryCap) -> Result<()> {
+pub fn run(a: AnnualArgs, limits: &config::Limits) -> Result<()> {
     let q = config::quality(&a.quality, a.seed)?;
     let shard = config::shard(a.shard.as_deref())?;
     let mut scene = crate::scene::Scene::load(&a.scene)?;
@@ -79,12 +78,12 @@ pub fn run(a: AnnualArgs, cap: &MemoryCap) -> Result<()> {
         leed: a.leed,
         en17037: a.en17037,
         daylight_coefficients: !a.forward,
-        max_memory: Some(cap.clone()),
+        max_memory: Some(limits.cap.clone()),
     };
     opts.metrics.validate()?;
     super::check_outputs(&a.out, a.gltf.as_deref())?;
     warnings(&weather.warnings);
-    let store = config::store(&a.cache, a.no_cache);
+    let store = config::store(&a.cache, a.no_cache, limits.cache_bytes);
     let stop = stop_on_ctrl_c();
     let bar = progress_bar("steps");
     let progress = |done: usize, total: usize| show_progress(bar.as_ref(), done, total);

@@ -31,6 +31,11 @@ pub struct Cli {
     /// before its work, naming the smallest cap it needs.
     #[arg(long, global = true, value_name = "SIZE", allow_hyphen_values = true)]
     pub max_memory: Option<String>,
+    /// Size limit of the projection cache folder: 2G (default), 20G, 500M (binary units).
+    /// Past it the records written longest ago are removed; a run whose records outgrow it
+    /// computes some directions again, and its report says so.
+    #[arg(long, global = true, value_name = "SIZE", allow_hyphen_values = true)]
+    pub cache_size: Option<String>,
 }
 
 /// Sky models for `--sky`.

@@ -90,13 +90,38 @@ pub fn image_sky(p: &SkyParams, ground_reflectance: f64) -> Result<crate::sky::S
     crate::sequence::sky::image_sky(path, mapping, p.rotate, p.dni, ground_reflectance)
 }
 
-/// The projection cache of a run: `dir` (`--cache`) at the default size limit, or none
+/// The projection cache of a run: `dir` (`--cache`) limited to `max_bytes` (`--cache-size`), or none
 /// with `--no-cache`.
-pub fn store(dir: &Path, no_cache: bool) -> Store {
+pub fn store(dir: &Path, no_cache: bool, max_bytes: u64) -> Store {
     if no_cache {
         Store::disabled()
     } else {
-        Store::open(dir, crate::cache::DEFAULT_MAX_BYTES)
+        Store::open(dir, max_bytes)
+    }
+}
+
+/// The limits every command reads before its work: the memory cap (`--max-memory`) and
+/// the cache folder's size limit (`--cache-size`, bytes).
+#[derive(Clone, Debug)]
+pub struct Limits {
+    /// The resident memory the run may use.
+    pub cap: crate::memory::MemoryCap,
+    /// The projection cache folder's size limit, bytes.
+    pub cache_bytes: u64,
+}
+
+impl Limits {
+    /// The limits of the global flags' values.
+    ///
+    /// # Errors
+    /// A value that is not a size, or under 1 MiB ([`crate::error::Error::Input`]).
+    pub fn from_args(max_memory: Option<&str>, cache_size: Option<&str>) -> Result<Limits> {
+        Ok(Limits {
+            cap: crate::memory::MemoryCap::from_arg(max_memory)?,
+            cache_bytes: cache_size.map_or(Ok(crate::cache::DEFAULT_MAX_BYTES), |t| {
+                crate::memory::parse_size_flag("--cache-size", t)
+            })?,
+        })
     }
 }
 

@@ -4,7 +4,6 @@ use super::args::DfArgs;
 use super::config;
 use super::messages::{note, warnings};
 use crate::error::Result;
-use crate::memory::MemoryCap;
 use crate::sequence;
 
 /// Runs `daystep df`: writes `df.csv` and `report.json` into `--out` and summarises the
@@ -12,15 +11,17 @@ use crate::sequence;
 ///
 /// # Errors
 /// Bad arguments or scene ([`crate::Error::Input`]), unwritable output.
-pub fn run(a: DfArgs, cap: &MemoryCap) -> Result<()> {
+pub fn run(a: DfArgs, limits: &config::Limits) -> Result<()> {
     let q = config::quality(&a.run.quality, a.run.seed)?;
     let scene = config::load_scene(&a.scene, &a.run)?;
     warnings(&scene.warnings);
     super::check_outputs(&a.out, None)?;
-    let store = config::store(&a.run.cache, a.run.no_cache);
+    let store = config::store(&a.run.cache, a.run.no_cache, limits.cache_bytes);
     let mut result = sequence::df::run_df(&scene, &q, &store)?;
     result.report.instant.memory = Some(sequence::report::MemoryReport::of(
-        cap.bytes, &cap.from, None,
+        limits.cap.bytes,
+        &limits.cap.from,
+        None,
     ));
     sequence::df::write_df(&scene, &result, &a.out)?;
     let r = &result.report;

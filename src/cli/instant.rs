@@ -4,7 +4,6 @@ use super::args::{InstantArgs, SkyArg};
 use super::config;
 use super::messages::{note, warnings};
 use crate::error::Result;
-use crate::memory::MemoryCap;
 use crate::sequence;
 
 /// Runs `daystep instant`: writes `sensors.csv` and `report.json` into `--out` and
@@ -12,7 +11,7 @@ use crate::sequence;
 ///
 /// # Errors
 /// Bad arguments or scene ([`crate::Error::Input`]), unwritable output.
-pub fn run(a: InstantArgs, cap: &MemoryCap) -> Result<()> {
+pub fn run(a: InstantArgs, limits: &config::Limits) -> Result<()> {
     let q = config::quality(&a.run.quality, a.run.seed)?;
     // The sky's flags are checked before the scene is read (an image sky reads its file
     // once the scene's ground reflectance is known).
@@ -23,10 +22,10 @@ pub fn run(a: InstantArgs, cap: &MemoryCap) -> Result<()> {
     warnings(&scene.warnings);
     let (utc, local) = crate::site::parse_time(&a.time, scene.site.utc_offset_h)?;
     super::check_outputs(&a.out, a.gltf.as_deref())?;
-    let store = config::store(&a.run.cache, a.run.no_cache);
+    let store = config::store(&a.run.cache, a.run.no_cache, limits.cache_bytes);
     let opts = sequence::EngineOptions {
         mesh_solution: a.gltf.is_some(),
-        max_memory_bytes: cap.bytes,
+        max_memory_bytes: limits.cap.bytes,
         count_elements_only: true,
         ..sequence::EngineOptions::default()
     };
@@ -60,7 +59,9 @@ pub fn run(a: InstantArgs, cap: &MemoryCap) -> Result<()> {
         }
     }
     result.report.memory = Some(sequence::report::MemoryReport::of(
-        cap.bytes, &cap.from, None,
+        limits.cap.bytes,
+        &limits.cap.from,
+        None,
     ));
     sequence::write_instant(&scene, &result, &a.out)?;
     let r = &result.report;

@@ -40,13 +40,13 @@ use clap::Parser;
 /// Any library error, to be mapped to an exit code.
 pub fn run(cli: Cli) -> Result<()> {
     // Read (and checked) before any work, for every command.
-    let cap = crate::memory::MemoryCap::from_arg(cli.max_memory.as_deref())?;
+    let limits = config::Limits::from_args(cli.max_memory.as_deref(), cli.cache_size.as_deref())?;
     match cli.command {
-        Command::Instant(a) => instant::run(a, &cap),
-        Command::Df(a) => df::run(a, &cap),
+        Command::Instant(a) => instant::run(a, &limits),
+        Command::Df(a) => df::run(a, &limits),
         Command::Convergence(a) => convergence::run(a),
-        Command::Annual(a) => annual::run(a, &cap),
-        Command::Render(a) => render::run(*a, &cap),
+        Command::Annual(a) => annual::run(a, &limits),
+        Command::Render(a) => render::run(*a, &limits),
         Command::Merge(a) => merge::run(a),
         Command::View(a) => view::run(a),
         Command::Cache { action } => cache::run(action),

@@ -4,7 +4,6 @@ use super::args::{RenderArgs, SkyArg};
 use super::config;
 use super::messages::{note, warnings};
 use crate::error::{Error, Result};
-use crate::memory::MemoryCap;
 use crate::render::falsecolor::Falsecolor;
 use crate::render::glare::{GlareOptions, Threshold};
 use crate::render::{Quantity, RenderOptions};
@@ -61,7 +60,7 @@ fn view(a: &RenderArgs, scene: Option<&Scene>) -> Result<View> {
 /// # Errors
 /// Bad arguments, view, scene or weather ([`Error::Input`]), unwritable output;
 /// [`Error::Interrupted`] after Ctrl-C, once the finished frames are written.
-pub fn run(a: RenderArgs, cap: &MemoryCap) -> Result<()> {
+pub fn run(a: RenderArgs, limits: &config::Limits) -> Result<()> {
     let q = config::quality(&a.run.quality, a.run.seed)?;
     // Every number of the flags was checked when they were parsed; the image's area and
     // the camera are checked here, before the scene is read (a named view once it is).
@@ -152,7 +151,7 @@ pub fn run(a: RenderArgs, cap: &MemoryCap) -> Result<()> {
         }
     };
     let outputs = RenderOutputs {
-        max_memory: Some(cap.clone()),
+        max_memory: Some(limits.cap.clone()),
         png: Some(a.exposure),
         falsecolor: a.falsecolor.then(|| Falsecolor {
             scale_max: a.scale,
@@ -173,7 +172,7 @@ pub fn run(a: RenderArgs, cap: &MemoryCap) -> Result<()> {
         command: std::env::args().collect::<Vec<_>>().join(" "),
     };
     super::check_outputs(&a.out, a.gltf.as_deref())?;
-    let store = config::store(&a.run.cache, a.run.no_cache);
+    let store = config::store(&a.run.cache, a.run.no_cache, limits.cache_bytes);
     let stop = super::annual::stop_on_ctrl_c();
     let bar = super::annual::progress_bar("frames");
     let progress =
