@@ -464,11 +464,15 @@ mod tests {
         }
     }
 
+    /// A record of the same size for every direction `d`.
+    fn bytes(d: u64) -> Vec<u8> {
+        encode(&key(d), &[Section::f64s(300, &[d as f64; 64])])
+    }
+
     #[test]
     fn a_run_that_outgrows_the_limit_says_so() {
         let dir = tempfile::tempdir().unwrap();
         let c = dir.path().join("c");
-        let bytes = |d: u64| encode(&key(d), &[Section::f64s(300, &[d as f64; 64])]);
         let size = bytes(0).len() as u64;
         let roomy = Store::open(&c, 10 * size);
         for d in 0..5 {
@@ -492,7 +496,6 @@ mod tests {
         // and the size the next write adds to.
         let dir = tempfile::tempdir().unwrap();
         let c = dir.path().join("c");
-        let bytes = |d: u64| encode(&key(d), &[Section::f64s(300, &[d as f64; 64])]);
         let size = bytes(0).len() as u64;
         let big = Store::open(&c, DEFAULT_MAX_BYTES);
         for d in 0..6 {
