@@ -1,9 +1,10 @@
-//! `daystep annual`: a time series over a weather file, resumable, with a progress bar on
-//! a terminal and a Ctrl-C that stops after the days in flight.
+//! `daystep annual`: a time series over a weather file, resumable, with progress on
+//! standard error and a Ctrl-C that stops after the days in flight.
 
 use super::args::AnnualArgs;
 use super::config;
 use super::messages::{note, warnings};
+use super::progress::Progress;
 use crate::error::{Error, Result};
 use crate::sequence::annual::{AnnualOptions, RunControl};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -21,28 +22,6 @@ pub(super) fn stop_on_ctrl_c() -> Arc<AtomicBool> {
         note!("\nstopping after the work in flight (Ctrl-C again to abort)…");
     });
     stop
-}
-
-/// A progress bar when standard error is a terminal.
-pub(super) fn progress_bar(unit: &str) -> Option<indicatif::ProgressBar> {
-    std::io::IsTerminal::is_terminal(&std::io::stderr()).then(|| {
-        let b = indicatif::ProgressBar::new(0);
-        b.set_style(
-            indicatif::ProgressStyle::with_template(&format!(
-                "{{bar:40}} {{pos}}/{{len}} {unit} {{per_sec}} ETA {{eta}}"
-            ))
-            .expect("valid template"),
-        );
-        b
-    })
-}
-
-/// Moves `bar` (when there is one) to `done` of `total`.
-pub(super) fn show_progress(bar: Option<&indicatif::ProgressBar>, done: usize, total: usize) {
-    if let Some(b) = bar {
-        b.set_length(total as u64);
-        b.set_position(done as u64);
-    }
 }
 
 /// Runs `daystep annual` into `--out`; a rerun with the same folder continues.
@@ -85,17 +64,15 @@ pub fn run(a: AnnualArgs, limits: &config::Limits) -> Result<()> {
     warnings(&weather.warnings);
     let store = config::store(&a.cache, a.no_cache, limits.cache_bytes);
     let stop = stop_on_ctrl_c();
-    let bar = progress_bar("steps");
-    let progress = |done: usize, total: usize| show_progress(bar.as_ref(), done, total);
+    let shown = Progress::new("steps");
+    let progress = |done: usize, total: usize| shown.show(done, total);
     let control = RunControl {
         stop: &stop,
         progress: &progress,
     };
     let r =
         crate::sequence::annual::run_annual(&scene, &weather, &q, &store, &a.out, &opts, &control)?;
-    if let Some(b) = bar {
-        b.finish_and_clear();
-    }
+    shown.finish();
     warnings(&r.warnings);
     if r.interrupted {
         note!(

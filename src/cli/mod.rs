@@ -28,6 +28,7 @@ pub mod ranges;
 pub mod render;
 pub mod view;
 pub(crate) mod messages;
+mod progress;
 
 pub use args::{Cli, Command};
 

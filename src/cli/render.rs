@@ -174,9 +174,8 @@ pub fn run(a: RenderArgs, limits: &config::Limits) -> Result<()> {
     super::check_outputs(&a.out, a.gltf.as_deref())?;
     let store = config::store(&a.run.cache, a.run.no_cache, limits.cache_bytes);
     let stop = super::annual::stop_on_ctrl_c();
-    let bar = super::annual::progress_bar("frames");
-    let progress =
-        |done: usize, total: usize| super::annual::show_progress(bar.as_ref(), done, total);
+    let shown = super::progress::Progress::new("frames");
+    let progress = |done: usize, total: usize| shown.show(done, total);
     let control = RunControl {
         stop: &stop,
         progress: &progress,
@@ -184,9 +183,7 @@ pub fn run(a: RenderArgs, limits: &config::Limits) -> Result<()> {
     let r = run_render(
         &scene, &q, &store, &camera, &frames, &a.out, &outputs, &control,
     )?;
-    if let Some(b) = bar {
-        b.finish_and_clear();
-    }
+    shown.finish();
     warnings(&r.warnings);
     if r.interrupted {
         note!(
