@@ -22,6 +22,9 @@ pub struct MemoryCap {
     pub bytes: u64,
     /// Where the figure came from ("--max-memory 4G", "80 % of MemAvailable", …).
     pub from: String,
+    /// The user gave it (`--max-memory`): a run may fill it. The machine's default only
+    /// bounds a run, which otherwise keeps to its own, smaller working sizes.
+    pub given: bool,
 }
 
 impl MemoryCap {
@@ -35,6 +38,7 @@ impl MemoryCap {
         Ok(MemoryCap {
             bytes: parse_size_flag("--max-memory", text)?,
             from: format!("--max-memory {}", text.trim()),
+            given: true,
         })
     }
 
@@ -51,12 +55,14 @@ impl MemoryCap {
                 return MemoryCap {
                     bytes: 4 << 30,
                     from: "4 GiB (the machine's available memory could not be read)".into(),
+                    given: false,
                 }
             }
         };
         MemoryCap {
             bytes: (bytes as f64 * DEFAULT_SHARE) as u64,
             from: format!("{:.0} % of {what}", DEFAULT_SHARE * 100.0),
+            given: false,
         }
     }
 

@@ -129,14 +129,7 @@ fn daylight_coefficients_equal_forward_solves_within_their_stated_errors() {
         }
     }
     let store = Store::disabled();
-    let opts = EngineOptions {
-        surfaces: false,
-        max_memory_bytes: 0,
-        defer_operator: false,
-        mesh_solution: false,
-        values_only: false,
-        count_elements_only: false,
-    };
+    let opts = EngineOptions::default();
     let forward = Engine::new(&scene, &q, &store, &opts);
     let every_node = Quality {
         indirect_depth: u32::MAX,
@@ -310,14 +303,7 @@ fn steps_summed_together_equal_steps_summed_alone() {
         .collect();
     assert!(steps.len() >= 6, "a sunny day has daylight steps");
     let store = Store::disabled();
-    let opts = EngineOptions {
-        surfaces: false,
-        max_memory_bytes: 0,
-        defer_operator: false,
-        mesh_solution: false,
-        values_only: false,
-        count_elements_only: false,
-    };
+    let opts = EngineOptions::default();
     let mut dc = Engine::new(&scene, &q, &store, &opts);
     assert!(dc.prepare(&steps).unwrap());
     let skies: Vec<Sky> = steps

@@ -26,6 +26,7 @@ pub fn run(a: InstantArgs, limits: &config::Limits) -> Result<()> {
     let opts = sequence::EngineOptions {
         mesh_solution: a.gltf.is_some(),
         max_memory_bytes: limits.cap.bytes,
+        max_memory_given: limits.cap.given,
         count_elements_only: true,
         ..sequence::EngineOptions::default()
     };

@@ -75,6 +75,8 @@ struct Lines {
     first: Option<(Duration, usize)>,
     /// The latest count.
     now: (usize, usize),
+    /// The count the last line gave.
+    said: (usize, usize),
 }
 
 impl Lines {
@@ -84,6 +86,7 @@ impl Lines {
             last: None,
             first: None,
             now: (0, 0),
+            said: (0, 0),
         }
     }
 
@@ -96,14 +99,15 @@ impl Lines {
             return None;
         }
         self.last = Some(t);
+        self.said = self.now;
         Some(self.line(t, first))
     }
 
-    /// The closing line at `t`, when any line was written.
+    /// The closing line at `t`, when any line was written and the count moved since.
     fn last(&mut self, t: Duration) -> Option<String> {
         let first = self.first?;
         self.last?;
-        Some(self.line(t, first))
+        (self.now != self.said).then(|| self.line(t, first))
     }
 
     fn line(&self, t: Duration, (t1, done1): (Duration, usize)) -> String {
@@ -155,7 +159,8 @@ mod tests {
             Some("2000/4000 steps (50 %), 0:01:00 elapsed, about 0:01:50 left")
         );
         assert_eq!(l.due(at(119), 3000, 4000), None);
-        assert!(l.due(at(120), 3000, 4000).is_some());
+        assert!(l.due(at(120), 2500, 4000).is_some());
+        assert_eq!(l.due(at(130), 3000, 4000), None);
         // 2 000 steps in 145 s: 1 000 left take 72.5 s.
         assert_eq!(
             l.last(at(150)).as_deref(),
@@ -173,10 +178,16 @@ mod tests {
         assert!(Lines::new("steps").due(at(61), 0, 10).is_some());
         let mut long = Lines::new("steps");
         long.due(at(0), 0, 10);
-        long.due(at(70), 10, 10);
+        long.due(at(70), 9, 10);
+        long.due(at(75), 10, 10);
         assert_eq!(
-            long.last(at(71)).as_deref(),
-            Some("10/10 steps (100 %), 0:01:11 elapsed")
+            long.last(at(76)).as_deref(),
+            Some("10/10 steps (100 %), 0:01:16 elapsed")
         );
+        // A count already said is not said again.
+        let mut said = Lines::new("steps");
+        said.due(at(0), 0, 10);
+        assert!(said.due(at(70), 10, 10).is_some());
+        assert_eq!(said.last(at(71)), None);
     }
 }

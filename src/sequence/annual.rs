@@ -297,6 +297,7 @@ pub fn run_annual(
         &EngineOptions {
             surfaces: opts.surfaces,
             max_memory_bytes: opts.max_memory.as_ref().map_or(0, |c| c.bytes),
+            max_memory_given: opts.max_memory.as_ref().is_some_and(|c| c.given),
             defer_operator: opts.daylight_coefficients,
             mesh_solution: false,
             values_only: false,
@@ -403,7 +404,7 @@ pub fn run_annual(
         quality,
         store,
         &lit,
-        opts.max_memory.as_ref().map_or(0, |c| c.bytes),
+        opts.max_memory.as_ref(),
         control,
     )?;
     if paths.is_none() && variants.iter().any(|v| v.scene.is_some()) {

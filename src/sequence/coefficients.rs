@@ -193,24 +193,23 @@ impl Coefficients {
     /// Prepares the coefficients every step of `steps` needs: the nodes of each step's
     /// cut (read from the cache or computed, through `dirs` for the projections and
     /// direct responses and `op` for the interreflection) and the sun-grid vertices
-    /// around each step's sun, with the adjoint responses sized to what `max_memory`
-    /// leaves ([`adjoint_budget`]; 0: no cap). Also returns each step's sky (`None`
+    /// around each step's sun, with the adjoint responses sized to what the cap
+    /// `opts.max_memory_bytes` leaves ([`adjoint_budget`]; 0: no cap). Also returns each step's sky (`None`
     /// where it cannot be built), so the steps need not build them again. With
-    /// `values_only` only what the values need is kept ([`Self::evaluate_values_batch`]: the
+    /// `opts.values_only` only what the values need is kept ([`Self::evaluate_values_batch`]: the
     /// children's direct rows and the parts' mean, 5 rows per node instead of 14); the
     /// cache records are the same.
     ///
     /// # Errors
     /// The coefficients, one adjoint block and the directions in flight cannot fit
-    /// `max_memory` beside what the process already holds ([`crate::Error::Input`]).
+    /// the cap beside what the process already holds ([`crate::Error::Input`]).
     pub(super) fn prepare(
         scene: &Scene,
         dirs: &Directions,
         op: &mut Option<Transport>,
         load_operator: impl FnOnce() -> Transport,
         steps: &[(StepTime, SkySpec)],
-        max_memory: u64,
-        values_only: bool,
+        opts: &super::EngineOptions,
     ) -> Result<(Coefficients, Vec<Option<Sky>>)> {
         let t0 = Instant::now();
         let quality = dirs.quality();
@@ -293,7 +292,8 @@ impl Coefficients {
             let resident =
                 crate::memory::resident_bytes().map_or(0, |r| r + coefficient_bytes + in_flight);
             let budget = adjoint_budget(
-                max_memory,
+                opts.max_memory_bytes,
+                opts.max_memory_given,
                 held,
                 resident,
                 op.adjoint_bytes_per_sensor() * op.adjoint_block_size(0) as u64,
@@ -360,7 +360,7 @@ impl Coefficients {
                 .map(|(key, d)| {
                     (
                         key,
-                        if values_only {
+                        if opts.values_only {
                             d.values_only(parts, k)
                         } else {
                             d

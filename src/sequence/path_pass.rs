@@ -57,11 +57,12 @@ impl<'a> Paths<'a> {
         quality: &Quality,
         store: &'a Store,
         steps: &[(StepTime, SkySpec)],
-        max_memory_bytes: u64,
+        cap: Option<&crate::memory::MemoryCap>,
         control: &RunControl,
     ) -> Result<Option<Paths<'a>>> {
         let opts = EngineOptions {
-            max_memory_bytes,
+            max_memory_bytes: cap.map_or(0, |c| c.bytes),
+            max_memory_given: cap.is_some_and(|c| c.given),
             defer_operator: true,
             values_only: true,
             ..EngineOptions::default()

@@ -206,8 +206,7 @@ impl<'a> Engine<'a> {
                 &mut self.operator,
                 load,
                 steps,
-                self.opts.max_memory_bytes,
-                self.opts.values_only,
+                &self.opts,
             )
         })?;
         // The steps sum coefficients and never read the operator again: it is the run's

@@ -21,6 +21,9 @@ pub struct EngineOptions {
     /// coefficients' adjoint blocks are sized to what is left of it
     /// ([`super::step::Engine::prepare`]); results do not depend on it.
     pub max_memory_bytes: u64,
+    /// The user gave the cap (`--max-memory`): the adjoint blocks may fill it. Under the
+    /// machine's default cap they stop at [`super::coefficients::RESPONSE_MAX_BYTES`].
+    pub max_memory_given: bool,
     /// Do not read or build the interreflection operator in [`super::step::Engine::new`]:
     /// [`super::step::Engine::prepare`] reads it only when some daylight coefficients are missing (a
     /// warm annual run never needs it), or when the steps will solve forward after all.

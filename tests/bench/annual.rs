@@ -258,6 +258,7 @@ fn child(args: &[String]) {
         max_memory: o.max_memory.map(|b| daystep::memory::MemoryCap {
             bytes: b,
             from: format!("--max-memory {b}"),
+            given: true,
         }),
         ..AnnualOptions::default()
     };
