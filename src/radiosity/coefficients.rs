@@ -183,9 +183,7 @@ impl Transport {
             seconds: t0.elapsed().as_secs_f64(),
         }
     }
-}
 
-impl Transport {
     /// Solves the adjoint systems of part `p` at level `l` (0 fine, 1 coarse) for the
     /// sub-blocks of [`BLOCK`] sensors starting at `subs`, in parallel against one
     /// transposed operator, each sub-block's f32 responses (rows × channels × width) passed
