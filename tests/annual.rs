@@ -69,6 +69,7 @@ fn resumed_and_sharded_runs_equal_one_run() {
     let control = RunControl {
         stop: &go,
         progress: &quiet,
+        coefficient_progress: &|_, _| {},
     };
     let one = d.path().join("one");
     let r = run_annual(
@@ -95,6 +96,7 @@ fn resumed_and_sharded_runs_equal_one_run() {
     let c = RunControl {
         stop: &stop,
         progress: &stop_after_first,
+        coefficient_progress: &|_, _| {},
     };
     let r1 = run_annual(
         &scene,
@@ -314,6 +316,7 @@ fn a_day_agrees_with_independent_cold_instants() {
     let control = RunControl {
         stop: &go,
         progress: &quiet,
+        coefficient_progress: &|_, _| {},
     };
     let days = ("2021-06-21", "2021-06-21");
     run_annual(
@@ -387,6 +390,7 @@ fn daylight_coefficients_agree_with_forward_solves_over_two_days() {
     let control = RunControl {
         stop: &go,
         progress: &quiet,
+        coefficient_progress: &|_, _| {},
     };
     let run = |name: &str, coefficients: bool| {
         let out = d.path().join(name);
@@ -472,6 +476,7 @@ fn surfaces_report_incident_and_transmitted_solar_per_group() {
     let control = RunControl {
         stop: &go,
         progress: &quiet,
+        coefficient_progress: &|_, _| {},
     };
     let out = d.path().join("out");
     let o = AnnualOptions {
@@ -558,6 +563,7 @@ fn a_run_cut_between_its_final_renames_resumes() {
     let control = RunControl {
         stop: &go,
         progress: &quiet,
+        coefficient_progress: &|_, _| {},
     };
     let out = d.path().join("run");
     let o = opts(("2021-03-20", "2021-03-20"), (1, 1));

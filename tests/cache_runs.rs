@@ -282,6 +282,7 @@ fn a_warm_annual_run_reads_its_cuts_and_a_short_record_is_made_again() {
     let control = RunControl {
         stop: &go,
         progress: &quiet,
+        coefficient_progress: &|_, _| {},
     };
     let day = chrono::NaiveDate::from_ymd_opt(2021, 6, 21);
     let opts = AnnualOptions {

@@ -136,12 +136,24 @@ fn daylight_coefficients_equal_forward_solves_within_their_stated_errors() {
         ..q
     };
     let mut dc = Engine::new(&scene, &every_node, &store, &opts);
+    let seen = std::sync::Mutex::new(Vec::new());
     assert!(
-        dc.prepare(&steps).unwrap(),
+        dc.prepare(&steps, &|d, t| seen.lock().unwrap().push((d, t)))
+            .unwrap(),
         "the office takes daylight coefficients"
     );
+    // Progress counts every direction in every sensor block, from 0 to all, never back.
+    let seen = seen.into_inner().unwrap();
+    let st = dc.coefficient_stats().unwrap();
+    let passes = st.computed * scene.sensors.len().div_ceil(st.block_sensors);
+    assert!(passes > 0);
+    assert_eq!(seen.first(), Some(&(0, passes)));
+    assert_eq!(seen.last(), Some(&(passes, passes)));
+    assert!(seen
+        .windows(2)
+        .all(|w| w[0].0 <= w[1].0 && w[1].1 == passes));
     let mut inherit = Engine::new(&scene, &q, &store, &opts);
-    assert!(inherit.prepare(&steps).unwrap());
+    assert!(inherit.prepare(&steps, &|_, _| {}).unwrap());
     let inherited = inherit.coefficient_stats().unwrap().indirect_from_ancestors;
     assert!(
         inherited > 0,
@@ -305,7 +317,7 @@ fn steps_summed_together_equal_steps_summed_alone() {
     let store = Store::disabled();
     let opts = EngineOptions::default();
     let mut dc = Engine::new(&scene, &q, &store, &opts);
-    assert!(dc.prepare(&steps).unwrap());
+    assert!(dc.prepare(&steps, &|_, _| {}).unwrap());
     let skies: Vec<Sky> = steps
         .iter()
         .map(|(at, spec)| {

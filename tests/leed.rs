@@ -90,6 +90,7 @@ fn blinds_close_what_the_two_percent_rule_needs_and_paths_sum_to_the_room() {
     let control = RunControl {
         stop: &go,
         progress: &quiet,
+        coefficient_progress: &|_, _| {},
     };
     let date = |s| Some(chrono::NaiveDate::parse_from_str(s, "%Y-%m-%d").unwrap());
     // Low winter sun into the south window, morning sun into the east one.
@@ -254,6 +255,7 @@ fn an_interrupted_leed_run_resumes_to_the_same_paths_and_numbers() {
     let control = RunControl {
         stop: &go,
         progress: &quiet,
+        coefficient_progress: &|_, _| {},
     };
     let one = d.path().join("one");
     let r = run_annual(&scene, &weather, &q, &store, &one, &opts, &control).unwrap();
@@ -271,6 +273,7 @@ fn an_interrupted_leed_run_resumes_to_the_same_paths_and_numbers() {
         let c = RunControl {
             stop: &stop,
             progress: &stop_at,
+            coefficient_progress: &|_, _| {},
         };
         let control = if resumed { &control } else { &c };
         let r = run_annual(&scene, &weather, &q, &store, &stopped, &opts, control).unwrap();
@@ -310,6 +313,7 @@ fn en17037_on_part_of_a_year_is_refused_before_any_work() {
     let control = RunControl {
         stop: &go,
         progress: &quiet,
+        coefficient_progress: &|_, _| {},
     };
     let opts = AnnualOptions {
         start: Some(chrono::NaiveDate::from_ymd_opt(2021, 6, 1).unwrap()),

@@ -41,6 +41,7 @@ fn a_capped_year_stops_before_the_work_or_writes_the_uncapped_bytes() {
     let control = RunControl {
         stop: &go,
         progress: &quiet,
+        coefficient_progress: &|_, _| {},
     };
     let run = |name: &str, cap: Option<MemoryCap>| {
         let o = AnnualOptions {

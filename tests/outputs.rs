@@ -89,6 +89,7 @@ fn render_into(dir: &Path, i: &Inputs) -> RenderReport {
     let control = RunControl {
         stop: &stop,
         progress: &|_, _| {},
+        coefficient_progress: &|_, _| {},
     };
     let store = Store::disabled();
     run_render(

@@ -358,6 +358,7 @@ fn a_sequence_interrupted_and_resumed_gives_identical_files() {
         let control = RunControl {
             stop: &stop,
             progress: &progress,
+            coefficient_progress: &|_, _| {},
         };
         run_render(
             &scene, &q, &store, &camera, &frames, dir, &outputs, &control,
@@ -487,6 +488,7 @@ fn the_gltf_holds_every_frame_and_a_plane_reads_its_closed_form() {
     let control = RunControl {
         stop: &stop,
         progress: &|_, _| {},
+        coefficient_progress: &|_, _| {},
     };
     let store = Store::disabled();
     let q = Quality::preset("draft").unwrap();
@@ -591,6 +593,7 @@ fn a_render_under_a_uniform_image_sky_reads_rho_l() {
     let control = RunControl {
         stop: &stop,
         progress: &|_, _| {},
+        coefficient_progress: &|_, _| {},
     };
     let outputs = RenderOutputs::default();
     let q = Quality::preset("draft").unwrap();

@@ -8,7 +8,7 @@ use super::progress::Progress;
 use crate::error::{Error, Result};
 use crate::sequence::annual::{AnnualOptions, RunControl};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 /// A flag set by the first Ctrl-C; a second one kills the process (exit 130) while the
 /// batch in flight finishes.
@@ -64,14 +64,34 @@ pub fn run(a: AnnualArgs, limits: &config::Limits) -> Result<()> {
     warnings(&weather.warnings);
     let store = config::store(&a.cache, a.no_cache, limits.cache_bytes);
     let stop = stop_on_ctrl_c();
+    // The coefficients' passes come before the first step; the steps' count ends them.
+    let coefficients = Mutex::new(Some(Progress::new(
+        "direction passes of the daylight coefficients",
+    )));
+    let end_coefficients = || {
+        if let Some(p) = coefficients.lock().ok().and_then(|mut p| p.take()) {
+            p.finish();
+        }
+    };
+    let coefficient_progress = |done: usize, total: usize| {
+        if let Some(p) = coefficients.lock().ok().as_deref().and_then(Option::as_ref) {
+            p.show(done, total);
+        }
+    };
     let shown = Progress::new("steps");
-    let progress = |done: usize, total: usize| shown.show(done, total);
+    let progress = |done: usize, total: usize| {
+        end_coefficients();
+        shown.show(done, total);
+    };
     let control = RunControl {
         stop: &stop,
         progress: &progress,
+        coefficient_progress: &coefficient_progress,
     };
     let r =
-        crate::sequence::annual::run_annual(&scene, &weather, &q, &store, &a.out, &opts, &control)?;
+        crate::sequence::annual::run_annual(&scene, &weather, &q, &store, &a.out, &opts, &control);
+    end_coefficients();
+    let r = r?;
     shown.finish();
     warnings(&r.warnings);
     if r.interrupted {

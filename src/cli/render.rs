@@ -179,6 +179,7 @@ pub fn run(a: RenderArgs, limits: &config::Limits) -> Result<()> {
     let control = RunControl {
         stop: &stop,
         progress: &progress,
+        coefficient_progress: &|_, _| {},
     };
     let r = run_render(
         &scene, &q, &store, &camera, &frames, &a.out, &outputs, &control,

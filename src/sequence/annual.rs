@@ -213,12 +213,19 @@ pub struct AnnualReport {
 }
 
 /// How a caller steers a long run: `stop` is polled between batches of days (set it from
-/// a Ctrl-C handler); `progress(done, total)` is called after each batch.
+/// a Ctrl-C handler); `progress(done, total)` is called after each batch, and
+/// `coefficient_progress` while the daylight coefficients are computed before the first
+/// step (a cold run's longest stage: 15 minutes on a 10 000-sensor building day).
 pub struct RunControl<'a> {
     /// Set to stop after the batch in flight.
     pub stop: &'a AtomicBool,
     /// Called with (steps done, steps in the run).
     pub progress: &'a (dyn Fn(usize, usize) + Sync),
+    /// Called with (direction passes done, passes in all) while the daylight coefficients
+    /// are computed: one pass applies a sensor block's adjoint responses to one
+    /// direction ([`super::step::Engine::prepare`]). Not called when every coefficient is
+    /// cached.
+    pub coefficient_progress: &'a (dyn Fn(usize, usize) + Sync),
 }
 
 /// Runs the time series of `weather` on `scene` into `out`.
@@ -319,7 +326,7 @@ pub fn run_annual(
         .map(|(s, _)| (step_time(scene, s.record), perez(s.record)))
         .collect();
     if opts.daylight_coefficients && !opts.surfaces {
-        engine.prepare(&lit)?;
+        engine.prepare(&lit, control.coefficient_progress)?;
     }
     // LEED's light paths, evaluated beside the steps (an unsharded run: shards skip LEED).
     let variants = if opts.leed && n == 1 {

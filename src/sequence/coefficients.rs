@@ -198,7 +198,8 @@ impl Coefficients {
     /// where it cannot be built), so the steps need not build them again. With
     /// `opts.values_only` only what the values need is kept ([`Self::evaluate_values_batch`]: the
     /// children's direct rows and the parts' mean, 5 rows per node instead of 14); the
-    /// cache records are the same.
+    /// cache records are the same. `progress(done, total)` is called after each batch of
+    /// directions in each sensor block (a pass is one direction in one block).
     ///
     /// # Errors
     /// The coefficients, one adjoint block and the directions in flight cannot fit
@@ -210,6 +211,7 @@ impl Coefficients {
         load_operator: impl FnOnce() -> Transport,
         steps: &[(StepTime, SkySpec)],
         opts: &super::EngineOptions,
+        progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<(Coefficients, Vec<Option<Sky>>)> {
         let t0 = Instant::now();
         let quality = dirs.quality();
@@ -307,11 +309,14 @@ impl Coefficients {
                     ..NodeData::default()
                 })
                 .collect();
-            for s0 in (0..k).step_by(block) {
+            let passes = k.div_ceil(block) * todo.len();
+            progress(0, passes);
+            for (b, s0) in (0..k).step_by(block).enumerate() {
                 let xb = op.adjoint_block(s0..(s0 + block).min(k));
                 stats.sweeps += xb.sweeps;
                 let w = xb.sensors.len();
-                for (ids, outs) in todo.chunks(BATCH).zip(fresh.chunks_mut(BATCH)) {
+                for (c, (ids, outs)) in todo.chunks(BATCH).zip(fresh.chunks_mut(BATCH)).enumerate()
+                {
                     // The batch's projections and mesh weights in parallel, then the
                     // block's responses applied to all of them in one pass.
                     let terms: Vec<DirectionTerms> = ids
@@ -333,6 +338,7 @@ impl Coefficients {
                                 .copy_from_slice(&v[row * w..(row + 1) * w]);
                         }
                     }
+                    progress(b * todo.len() + (todo.len()).min((c + 1) * BATCH), passes);
                 }
             }
             for (&i, nd) in todo.iter().zip(fresh) {

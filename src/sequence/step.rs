@@ -168,12 +168,18 @@ impl<'a> Engine<'a> {
     /// steps `steps` (each step's time and sky; a later step with a sky node or sun
     /// direction none of these had panics). Declined (returns false, steps keep the
     /// forward solve) when the scene has no interreflection, when surface output needs
-    /// each step's mesh solution, or when something emits.
+    /// each step's mesh solution, or when something emits. `progress(done, total)` counts
+    /// the direction passes of the coefficients that are computed (none when all are
+    /// cached).
     ///
     /// # Errors
     /// The coefficients cannot fit [`EngineOptions::max_memory_bytes`] ([`crate::Error::Input`]
     /// naming `--max-memory` and the smallest cap that fits), found before they are computed.
-    pub fn prepare(&mut self, steps: &[(StepTime, SkySpec)]) -> Result<bool> {
+    pub fn prepare(
+        &mut self,
+        steps: &[(StepTime, SkySpec)],
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<bool> {
         if self.operator.is_none() && !self.operator_deferred {
             return Ok(false);
         }
@@ -207,6 +213,7 @@ impl<'a> Engine<'a> {
                 load,
                 steps,
                 &self.opts,
+                progress,
             )
         })?;
         // The steps sum coefficients and never read the operator again: it is the run's

@@ -265,6 +265,7 @@ fn child(args: &[String]) {
     let c = RunControl {
         stop: &stop,
         progress: &quiet,
+        coefficient_progress: &|_, _| {},
     };
     let _ = std::fs::remove_dir_all(&out);
     let report = run_annual(&scene, &w, &Quality::default(), &store, &out, &opts, &c).unwrap();

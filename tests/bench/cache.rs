@@ -57,6 +57,7 @@ fn day(scene: &Scene, store: &Store, out: &Path) -> AnnualReport {
     let c = RunControl {
         stop: &stop,
         progress: &quiet,
+        coefficient_progress: &|_, _| {},
     };
     let _ = std::fs::remove_dir_all(out);
     run_annual(scene, &w, &Quality::default(), store, out, &opts, &c).unwrap()
