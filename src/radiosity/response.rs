@@ -413,17 +413,15 @@ impl Adjoint {
         }
         change
     }
-}
 
-impl Adjoint {
     /// [`Self::sweep_any`] for a whole block of sensors, reading X and its right-hand side
-    /// `gt` as rows of one channel's [`BLOCK`] values (`CH` of them per mesh row):
-    /// at a fixed width the compiler unrolls each entry into a few vector operations with
-    /// no bounds checks. The same operations in the same order, so bit-identical; 3.2×
-    /// fewer CPU samples in the sweep than the variable-width loop on the 10 k building
-    /// (a software prefetch of the rows ahead made it slower, and was left out).
-    /// `CH` is the number of channels, a constant so that grey blocks (1) lose the
-    /// channel loop: 1.5× fewer samples than with it at run time.
+    /// `gt` as rows of one channel's [`BLOCK`] values, `CH` (channels) of them per mesh
+    /// row. At a fixed width and a constant channel count the compiler unrolls each entry
+    /// into a few vector operations with no bounds checks: 3.2× fewer CPU samples in the
+    /// sweep than the variable-width loop on the 10 k building, and 1.5× fewer than the
+    /// fixed width with the channel count known only at run time (a software prefetch of
+    /// the rows ahead made it slower, and was left out). The same operations in the same
+    /// order, so bit-identical.
     #[inline(always)]
     fn sweep_block<const CH: usize>(&self, gt: &[f32], x: &mut [f32], floor: f32) -> f64 {
         // Row `r` of a one-channel-wide view of X or `gt`, at its fixed width.
