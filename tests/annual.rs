@@ -163,6 +163,54 @@ fn resumed_and_sharded_runs_equal_one_run() {
     for f in OUTPUTS {
         assert_eq!(read(&one, f), read(&merged, f), "{f} after merge");
     }
+
+    // Stopped while the daylight coefficients are computed (a fresh cache, so they are),
+    // before any step: an interrupted run with nothing written, which a rerun completes.
+    let early = d.path().join("early");
+    let fresh = Store::open(&d.path().join("cache-early"), DEFAULT_MAX_BYTES);
+    let stop = AtomicBool::new(false);
+    let passes = std::sync::Mutex::new(Vec::new());
+    let stop_in_coefficients = |done: usize, total: usize| {
+        passes.lock().unwrap().push((done, total));
+        stop.store(true, Ordering::SeqCst);
+    };
+    let c = RunControl {
+        stop: &stop,
+        progress: &quiet,
+        coefficient_progress: &stop_in_coefficients,
+    };
+    let r = run_annual(
+        &scene,
+        &weather,
+        &q,
+        &fresh,
+        &early,
+        &opts(days, (1, 1)),
+        &c,
+    )
+    .unwrap();
+    assert!(r.interrupted && r.computed == 0, "{r:?}");
+    // It stopped inside the coefficients, not after them.
+    let passes = passes.into_inner().unwrap();
+    assert!(passes.iter().all(|&(d, t)| d < t), "{passes:?}");
+    let r = run_annual(
+        &scene,
+        &weather,
+        &q,
+        &fresh,
+        &early,
+        &opts(days, (1, 1)),
+        &control,
+    )
+    .unwrap();
+    assert!(!r.interrupted && r.resumed == 0, "{r:?}");
+    for f in OUTPUTS {
+        assert_eq!(
+            read(&one, f),
+            read(&early, f),
+            "{f} after a stop in the coefficients"
+        );
+    }
 }
 
 /// The cache counters of a run's `report.json`: (rebuilds, write failures, writes).

@@ -24,6 +24,7 @@ use daystep::site::solar_position::solar_position;
 use daystep::sky::Sky;
 use daystep::weather::{read_weather, WeatherRecord};
 use std::path::Path;
+use std::sync::atomic::AtomicBool;
 
 fn office(dir: &Path, every: usize) -> Scene {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office");
@@ -138,8 +139,12 @@ fn daylight_coefficients_equal_forward_solves_within_their_stated_errors() {
     let mut dc = Engine::new(&scene, &every_node, &store, &opts);
     let seen = std::sync::Mutex::new(Vec::new());
     assert!(
-        dc.prepare(&steps, &|d, t| seen.lock().unwrap().push((d, t)))
-            .unwrap(),
+        dc.prepare(
+            &steps,
+            &|d, t| seen.lock().unwrap().push((d, t)),
+            &AtomicBool::new(false),
+        )
+        .unwrap(),
         "the office takes daylight coefficients"
     );
     // Progress counts every direction in every sensor block, from 0 to all, never back.
@@ -153,7 +158,9 @@ fn daylight_coefficients_equal_forward_solves_within_their_stated_errors() {
         .windows(2)
         .all(|w| w[0].0 <= w[1].0 && w[1].1 == passes));
     let mut inherit = Engine::new(&scene, &q, &store, &opts);
-    assert!(inherit.prepare(&steps, &|_, _| {}).unwrap());
+    assert!(inherit
+        .prepare(&steps, &|_, _| {}, &AtomicBool::new(false))
+        .unwrap());
     let inherited = inherit.coefficient_stats().unwrap().indirect_from_ancestors;
     assert!(
         inherited > 0,
@@ -317,7 +324,9 @@ fn steps_summed_together_equal_steps_summed_alone() {
     let store = Store::disabled();
     let opts = EngineOptions::default();
     let mut dc = Engine::new(&scene, &q, &store, &opts);
-    assert!(dc.prepare(&steps, &|_, _| {}).unwrap());
+    assert!(dc
+        .prepare(&steps, &|_, _| {}, &AtomicBool::new(false))
+        .unwrap());
     let skies: Vec<Sky> = steps
         .iter()
         .map(|(at, spec)| {

@@ -232,7 +232,9 @@ pub struct RunControl<'a> {
 ///
 /// # Errors
 /// Bad weather values at a step ([`Error::Input`] naming the weather file and line), or
-/// files that cannot be written.
+/// files that cannot be written. A stop ([`RunControl::stop`]) is not an error: the
+/// report says `interrupted`, also when it came while the daylight coefficients were
+/// computed (polled between their batches of directions).
 pub fn run_annual(
     scene: &Scene,
     weather: &Weather,
@@ -326,7 +328,13 @@ pub fn run_annual(
         .map(|(s, _)| (step_time(scene, s.record), perez(s.record)))
         .collect();
     if opts.daylight_coefficients && !opts.surfaces {
-        engine.prepare(&lit, control.coefficient_progress)?;
+        match engine.prepare(&lit, control.coefficient_progress, stop) {
+            // Stopped before the first step: the run ends as after a batch of days.
+            Err(Error::Interrupted) => report.interrupted = true,
+            r => {
+                r?;
+            }
+        }
     }
     // LEED's light paths, evaluated beside the steps (an unsharded run: shards skip LEED).
     let variants = if opts.leed && n == 1 {

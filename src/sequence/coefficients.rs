@@ -189,6 +189,16 @@ fn direct_rows(resp: &[crate::sensors::NodeResponse], k: usize) -> Vec<f32> {
     d
 }
 
+/// How the caller follows and stops [`Coefficients::prepare`].
+#[derive(Clone, Copy)]
+pub(super) struct Watch<'a> {
+    /// Called after each batch of directions in each sensor block with (direction passes
+    /// done, passes in all): a pass is one direction in one block.
+    pub progress: &'a (dyn Fn(usize, usize) + Sync),
+    /// Polled before each sensor block and batch of directions.
+    pub stop: &'a std::sync::atomic::AtomicBool,
+}
+
 impl Coefficients {
     /// Prepares the coefficients every step of `steps` needs: the nodes of each step's
     /// cut (read from the cache or computed, through `dirs` for the projections and
@@ -198,11 +208,12 @@ impl Coefficients {
     /// where it cannot be built), so the steps need not build them again. With
     /// `opts.values_only` only what the values need is kept ([`Self::evaluate_values_batch`]: the
     /// children's direct rows and the parts' mean, 5 rows per node instead of 14); the
-    /// cache records are the same. `progress(done, total)` is called after each batch of
-    /// directions in each sensor block (a pass is one direction in one block).
+    /// cache records are the same. `watch` follows the work and can stop it.
     ///
     /// # Errors
-    /// The coefficients, one adjoint block and the directions in flight cannot fit
+    /// [`crate::Error::Interrupted`] once `watch.stop` is set (nothing of the coefficients is
+    /// kept: a direction's are stored when every block is done). The coefficients, one
+    /// adjoint block and the directions in flight cannot fit
     /// the cap beside what the process already holds ([`crate::Error::Input`]).
     pub(super) fn prepare(
         scene: &Scene,
@@ -211,8 +222,9 @@ impl Coefficients {
         load_operator: impl FnOnce() -> Transport,
         steps: &[(StepTime, SkySpec)],
         opts: &super::EngineOptions,
-        progress: &(dyn Fn(usize, usize) + Sync),
+        watch: &Watch,
     ) -> Result<(Coefficients, Vec<Option<Sky>>)> {
+        let Watch { progress, stop } = *watch;
         let t0 = Instant::now();
         let quality = dirs.quality();
         let grid = SunGrid {
@@ -312,11 +324,17 @@ impl Coefficients {
             let passes = k.div_ceil(block) * todo.len();
             progress(0, passes);
             for (b, s0) in (0..k).step_by(block).enumerate() {
+                if stop.load(std::sync::atomic::Ordering::SeqCst) {
+                    return Err(crate::Error::Interrupted);
+                }
                 let xb = op.adjoint_block(s0..(s0 + block).min(k));
                 stats.sweeps += xb.sweeps;
                 let w = xb.sensors.len();
                 for (c, (ids, outs)) in todo.chunks(BATCH).zip(fresh.chunks_mut(BATCH)).enumerate()
                 {
+                    if stop.load(std::sync::atomic::Ordering::SeqCst) {
+                        return Err(crate::Error::Interrupted);
+                    }
                     // The batch's projections and mesh weights in parallel, then the
                     // block's responses applied to all of them in one pass.
                     let terms: Vec<DirectionTerms> = ids

@@ -83,7 +83,7 @@ impl<'a> Paths<'a> {
             (control.progress)(k, scenes.len());
             let mut e = Engine::new(scene, quality, store, &opts);
             // The run's own coefficients were counted; the paths' are a fraction of them.
-            e.prepare(steps, &|_, _| {})?;
+            e.prepare(steps, &|_, _| {}, control.stop)?;
             engines.push(e);
             let dir = out.join("paths").join(folder);
             std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;

@@ -170,15 +170,17 @@ impl<'a> Engine<'a> {
     /// forward solve) when the scene has no interreflection, when surface output needs
     /// each step's mesh solution, or when something emits. `progress(done, total)` counts
     /// the direction passes of the coefficients that are computed (none when all are
-    /// cached).
+    /// cached); `stop` ends them early.
     ///
     /// # Errors
+    /// [`crate::Error::Interrupted`] when `stop` was set while they were computed.
     /// The coefficients cannot fit [`EngineOptions::max_memory_bytes`] ([`crate::Error::Input`]
     /// naming `--max-memory` and the smallest cap that fits), found before they are computed.
     pub fn prepare(
         &mut self,
         steps: &[(StepTime, SkySpec)],
         progress: &(dyn Fn(usize, usize) + Sync),
+        stop: &std::sync::atomic::AtomicBool,
     ) -> Result<bool> {
         if self.operator.is_none() && !self.operator_deferred {
             return Ok(false);
@@ -213,7 +215,7 @@ impl<'a> Engine<'a> {
                 load,
                 steps,
                 &self.opts,
-                progress,
+                &super::coefficients::Watch { progress, stop },
             )
         })?;
         // The steps sum coefficients and never read the operator again: it is the run's
