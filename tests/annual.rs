@@ -179,30 +179,16 @@ fn resumed_and_sharded_runs_equal_one_run() {
         progress: &quiet,
         coefficient_progress: &stop_in_coefficients,
     };
-    let r = run_annual(
-        &scene,
-        &weather,
-        &q,
-        &fresh,
-        &early,
-        &opts(days, (1, 1)),
-        &c,
-    )
-    .unwrap();
+    let run = |c: &RunControl| {
+        let o = opts(days, (1, 1));
+        run_annual(&scene, &weather, &q, &fresh, &early, &o, c).unwrap()
+    };
+    let r = run(&c);
     assert!(r.interrupted && r.computed == 0, "{r:?}");
     // It stopped inside the coefficients, not after them.
     let passes = passes.into_inner().unwrap();
     assert!(passes.iter().all(|&(d, t)| d < t), "{passes:?}");
-    let r = run_annual(
-        &scene,
-        &weather,
-        &q,
-        &fresh,
-        &early,
-        &opts(days, (1, 1)),
-        &control,
-    )
-    .unwrap();
+    let r = run(&control);
     assert!(!r.interrupted && r.resumed == 0, "{r:?}");
     for f in OUTPUTS {
         assert_eq!(
