@@ -1,6 +1,7 @@
 //! The memory cap (`--max-memory`): a cap too small for the daylight coefficients stops
 //! the run before they are computed, naming the smallest cap; at that cap the run
-//! completes in the smallest adjoint blocks and writes the same bytes as an uncapped run;
+//! completes in the smallest adjoint blocks (the later ones reading the first one's
+//! source terms from its scratch file) and writes the same bytes as an uncapped run;
 //! the binary reads the flag, refuses a bad size with exit 1, and reports the cap and the
 //! peak in `report.json`.
 
@@ -83,6 +84,12 @@ fn a_capped_year_stops_before_the_work_or_writes_the_uncapped_bytes() {
     };
     assert_eq!(blocks(&capped), 32, "{smallest}");
     assert_eq!(blocks(&free), 83);
+    // The later blocks read the first block's source terms back from the scratch file.
+    let spilled = |r: &daystep::sequence::annual::AnnualReport| {
+        r.coefficients.expect("daylight coefficients").spilled_bytes
+    };
+    assert!(spilled(&capped) > 0, "three blocks share their terms");
+    assert_eq!(spilled(&free), 0, "one block has nothing to share");
     for f in ["illuminance.csv", "direct_sun.csv", "metrics.csv"] {
         assert!(
             std::fs::read(capped_out.join(f)).unwrap() == std::fs::read(free_out.join(f)).unwrap(),

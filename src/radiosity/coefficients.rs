@@ -322,8 +322,60 @@ impl AdjointBlock {
 
 /// One direction's source terms ([`Transport::direction_terms`]), ready for
 /// [`AdjointBlock::apply_many`].
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct DirectionTerms(Terms);
+
+impl DirectionTerms {
+    /// Bytes [`Self::write_to`] writes: two counts, then 16 bytes an entry.
+    pub fn encoded_bytes(&self) -> u64 {
+        8 + 16 * (self.0 .0.len() + self.0 .1.len()) as u64
+    }
+
+    /// Writes the terms (little-endian, every f32 by its bits) for [`Self::read_from`]:
+    /// a cold run's later adjoint blocks read them back instead of making them again.
+    ///
+    /// # Errors
+    /// What `w` returns.
+    pub fn write_to(&self, w: &mut impl std::io::Write) -> std::io::Result<()> {
+        let (fine, coarse) = &self.0;
+        let mut buf = Vec::with_capacity(self.encoded_bytes() as usize);
+        for l in [fine, coarse] {
+            buf.extend_from_slice(&(l.len() as u32).to_le_bytes());
+        }
+        for (r, v) in fine.iter().chain(coarse) {
+            buf.extend_from_slice(&r.to_le_bytes());
+            for c in v {
+                buf.extend_from_slice(&c.to_bits().to_le_bytes());
+            }
+        }
+        w.write_all(&buf)
+    }
+
+    /// The terms [`Self::write_to`] wrote, bit for bit.
+    ///
+    /// # Errors
+    /// What `r` returns (a short read is `UnexpectedEof`).
+    pub fn read_from(r: &mut impl std::io::Read) -> std::io::Result<DirectionTerms> {
+        let mut counts = [0u8; 8];
+        r.read_exact(&mut counts)?;
+        let word = |b: &[u8]| u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+        let mut buf = Vec::new();
+        let mut list = |n: u32| -> std::io::Result<Vec<(u32, [f32; 3])>> {
+            buf.resize(16 * n as usize, 0);
+            r.read_exact(&mut buf)?;
+            Ok(buf
+                .chunks_exact(16)
+                .map(|e| {
+                    let f = |i: usize| f32::from_bits(word(&e[4 * i..]));
+                    (word(e), [f(1), f(2), f(3)])
+                })
+                .collect())
+        };
+        let fine = list(word(&counts))?;
+        let coarse = list(word(&counts[4..]))?;
+        Ok(DirectionTerms((fine, coarse)))
+    }
+}
 
 impl Transport {
     /// The source terms of one direction whose mesh irradiance per unit normal irradiance
@@ -361,5 +413,55 @@ impl Transport {
                 .collect()
         };
         (weigh(s), weigh(coarse))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::DirectionTerms;
+
+    fn bits(t: &DirectionTerms) -> Vec<u32> {
+        let (fine, coarse) = &t.0;
+        [fine, coarse]
+            .iter()
+            .flat_map(|l| {
+                std::iter::once(l.len() as u32).chain(
+                    l.iter().flat_map(|(r, v)| {
+                        std::iter::once(*r).chain(v.iter().map(|c| c.to_bits()))
+                    }),
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn direction_terms_read_back_bit_for_bit_and_a_short_file_is_an_error() {
+        let t = DirectionTerms((
+            vec![
+                (0, [1.0, -0.0, f32::MIN_POSITIVE]),
+                (70_000, [3.5e-9, 2.0, 1e30]),
+            ],
+            vec![(3, [0.25, 0.5, 0.75])],
+        ));
+        let empty = DirectionTerms::default();
+        let mut buf = Vec::new();
+        for x in [&t, &empty, &t] {
+            x.write_to(&mut buf).unwrap();
+        }
+        let want = 2 * t.encoded_bytes() + empty.encoded_bytes();
+        assert_eq!(buf.len() as u64, want);
+        let mut r = &buf[..];
+        for x in [&t, &empty, &t] {
+            assert_eq!(bits(&DirectionTerms::read_from(&mut r).unwrap()), bits(x));
+        }
+        assert!(DirectionTerms::read_from(&mut r).is_err(), "nothing left");
+        let n = t.encoded_bytes() as usize;
+        for cut in [0, 3, 8, n - 1] {
+            let mut short = &buf[..cut];
+            assert!(
+                DirectionTerms::read_from(&mut short).is_err(),
+                "cut at {cut}"
+            );
+        }
     }
 }

@@ -31,7 +31,7 @@ pub(super) fn scene_bytes(scene: &Scene) -> u64 {
 /// each go over the directions once (the 100 000-triangle model's 104 blocks under 4G
 /// spent most of their profile recomputing the same directions' mesh weights; on the
 /// 10 000-triangle building with 9 540 sensors, 2 blocks instead of 22 took 0.96× the
-/// time). The machine's default cap is not: its 256 MB ceiling keeps a large model's
+/// time). The machine's default cap is not: its 128 MB ceiling keeps a large model's
 /// year within a few times Radiance's memory.
 ///
 /// # Errors

@@ -30,24 +30,16 @@
 //!   reflectance change recomputes them and reuses the projections and the operator; a
 //!   weather or site change reuses everything.
 
-use super::config::SkySpec;
-use super::direct::mesh_weights;
 use super::directions::Directions;
 use super::estimate::SensorValue;
-use super::step::StepTime;
-use crate::cache::{self, RecordKey, SceneHash, Section, FIRST_USER_TAG};
-use crate::error::Result;
+use crate::cache::FIRST_USER_TAG;
 use crate::photometry::{from_lux, lux, Rgb};
-use crate::radiosity::{DirectionTerms, Transport, TransportParams, TransportSensor};
-use crate::scene::Scene;
+use crate::radiosity::TransportSensor;
 use crate::sensors::SensorDirect;
-use crate::sky::Sky;
 use crate::sources::{Source, SourceKey, SunGrid};
-use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
-use std::time::Instant;
 
 /// Section tag of a coefficient record: (parts + 1) × sensors f32.
 const TAG_VALUES: u32 = FIRST_USER_TAG;
@@ -60,9 +52,10 @@ const COEFFICIENTS_VERSION: u32 = 4;
 /// Direct rows per node: 4 child responses, their sum, 4 uncertainties.
 const DIRECT_ROWS: usize = 9;
 /// Adjoint responses held at once without a memory cap, bytes: beyond it, larger blocks
-/// save little time (each block reads every direction once more). 256 MB of bfloat16
-/// responses hold as many sensors as 512 MB did in f32.
-pub const RESPONSE_MAX_BYTES: u64 = 256 << 20;
+/// save little time, since the later blocks read the first one's source terms
+/// ([`spill`]) rather than make them again. 128 MB of bfloat16 responses hold as many
+/// sensors as 256 MB did in f32.
+pub const RESPONSE_MAX_BYTES: u64 = 128 << 20;
 /// Directions whose source terms are held at once while coefficients are computed, and
 /// applied together ([`crate::radiosity::AdjointBlock::apply_many`]): a few megabytes of
 /// terms each on the generated building, and the block's responses read once per batch.
@@ -91,9 +84,14 @@ mod ground_sum;
 mod indirect_ancestors;
 #[path = "coefficient_sums.rs"]
 mod sums;
+#[path = "coefficient_prepare.rs"]
+mod prepare;
+#[path = "terms_spill.rs"]
+mod spill;
 pub use budget::adjoint_budget;
-use budget::{direction_bytes, scene_bytes};
 pub(super) use cut_batch::CutBatch;
+use prepare::record_key;
+pub(super) use prepare::Watch;
 use sums::axpy;
 
 /// What preparing the coefficients did (`report.json`).
@@ -121,6 +119,9 @@ pub struct CoefficientStats {
     pub block_sensors: usize,
     /// Gauss–Seidel sweeps of the adjoint solves.
     pub sweeps: u64,
+    /// Bytes of source terms the first sensor block wrote to a scratch file for the later
+    /// blocks to read (0: one block, or the file could not be used).
+    pub spilled_bytes: u64,
     /// Bytes the coefficients take in memory.
     pub bytes: u64,
     /// Sun-grid spacing, degrees.
@@ -189,235 +190,7 @@ fn direct_rows(resp: &[crate::sensors::NodeResponse], k: usize) -> Vec<f32> {
     d
 }
 
-/// How the caller follows and stops [`Coefficients::prepare`].
-#[derive(Clone, Copy)]
-pub(super) struct Watch<'a> {
-    /// Called after each batch of directions in each sensor block with (direction passes
-    /// done, passes in all): a pass is one direction in one block.
-    pub progress: &'a (dyn Fn(usize, usize) + Sync),
-    /// Polled before each sensor block and batch of directions.
-    pub stop: &'a std::sync::atomic::AtomicBool,
-}
-
 impl Coefficients {
-    /// Prepares the coefficients every step of `steps` needs: the nodes of each step's
-    /// cut (read from the cache or computed, through `dirs` for the projections and
-    /// direct responses and `op` for the interreflection) and the sun-grid vertices
-    /// around each step's sun, with the adjoint responses sized to what the cap
-    /// `opts.max_memory_bytes` leaves ([`adjoint_budget`]; 0: no cap). Also returns each step's sky (`None`
-    /// where it cannot be built), so the steps need not build them again. With
-    /// `opts.values_only` only what the values need is kept ([`Self::evaluate_values_batch`]: the
-    /// children's direct rows and the parts' mean, 5 rows per node instead of 14); the
-    /// cache records are the same. `watch` follows the work and can stop it.
-    ///
-    /// # Errors
-    /// [`crate::Error::Interrupted`] once `watch.stop` is set (nothing of the coefficients is
-    /// kept: a direction's are stored when every block is done). The coefficients, one
-    /// adjoint block and the directions in flight cannot fit
-    /// the cap beside what the process already holds ([`crate::Error::Input`]).
-    pub(super) fn prepare(
-        scene: &Scene,
-        dirs: &Directions,
-        op: &mut Option<Transport>,
-        load_operator: impl FnOnce() -> Transport,
-        steps: &[(StepTime, SkySpec)],
-        opts: &super::EngineOptions,
-        watch: &Watch,
-    ) -> Result<(Coefficients, Vec<Option<Sky>>)> {
-        let Watch { progress, stop } = *watch;
-        let t0 = Instant::now();
-        let quality = dirs.quality();
-        let grid = SunGrid {
-            spacing_deg: quality.sun_grid_deg,
-        };
-        let k = scene.sensors.len();
-        let store = dirs.store();
-        let hash = coefficient_hash(scene, dirs, &quality.transport);
-        // The nodes of every step's cut (and each step's sky where they were made here).
-        let union = super::cuts::union(scene, quality, steps, store);
-        let (wanted, skies) = (union.nodes, union.skies);
-        let mut stats = CoefficientStats {
-            cuts_from_cache: union.from_cache,
-            nodes: wanted.values().filter(|s| !s.is_sun()).count(),
-            sun_grid_vertices: wanted.values().filter(|s| s.is_sun()).count(),
-            sun_grid_deg: grid.spacing_deg,
-            ..CoefficientStats::default()
-        };
-        let parts = quality.transport.parts.max(2) as usize;
-        let union: Vec<Source> = wanted.into_values().collect();
-        let plan = indirect_ancestors::plan(&union, quality.indirect_depth);
-        stats.indirect_from_ancestors = plan.deep.len();
-        let list = &plan.solved;
-        // Grid vertices feed only the interreflection mesh (0.25 m² rows, not shadows on
-        // sensors), so they are projected at the sky nodes' resolution.
-        let res_of = |src: &Source| {
-            let sun = matches!(src.key, SourceKey::Sun(_));
-            quality.projection.resolution_for(sun)
-        };
-        // Cached coefficients, with the direct rows from the direction's sensor responses.
-        let mut data: Vec<Option<NodeData>> = list
-            .par_iter()
-            .map(|src| {
-                let key = record_key(hash, dirs, src, res_of(src))?;
-                let r = store.get(&key)?;
-                let v = r.section::<f32>(TAG_VALUES).ok()?.to_vec();
-                if v.len() != (parts + 1) * k {
-                    return None;
-                }
-                let direct = if src.is_sun() {
-                    Vec::new()
-                } else {
-                    r.section::<f32>(TAG_DIRECT)
-                        .ok()
-                        .filter(|d| d.len() == DIRECT_ROWS * k)
-                        .map(|d| d.to_vec())
-                        .unwrap_or_else(|| direct_rows(&dirs.sensor_responses(src, res_of(src)), k))
-                };
-                Some(NodeData {
-                    direct,
-                    indirect: Arc::new(v),
-                    ..NodeData::default()
-                })
-            })
-            .collect();
-        let todo: Vec<usize> = (0..list.len()).filter(|&i| data[i].is_none()).collect();
-        stats.from_cache = list.len() - todo.len();
-        stats.computed = todo.len();
-        stats.operator_needed = !todo.is_empty();
-        if !todo.is_empty() {
-            // Sensors in blocks that fit the budget; each block's adjoint responses turn
-            // every missing direction's mesh irradiance into its coefficients.
-            // The operator only now: a run whose coefficients are all cached never reads it.
-            let op: &Transport = op.get_or_insert_with(load_operator);
-            // The union's nodes, each with a row of stated error when it takes its
-            // ancestor's interreflection.
-            let coefficient_bytes = (union.len() * k * (DIRECT_ROWS + parts + 2) * 4) as u64;
-            // A direction in flight per thread (applying) or the solves' scratch (solving).
-            let threads = rayon::current_num_threads();
-            let in_flight = (threads as u64
-                * direction_bytes(quality.projection.resolution_for(true)))
-            .max(op.adjoint_scratch_bytes(threads));
-            // What is held beside the adjoint blocks, from sizes (not from the resident
-            // memory, which other work in the process would make a moving target): the
-            // same inputs always get the same blocks and the same smallest cap.
-            let held = op.bytes() + scene_bytes(scene) + coefficient_bytes + in_flight;
-            // The process may hold more than the sizes say (the allocator keeps what the
-            // operator's build freed): the blocks shrink to that too, never below one.
-            let resident =
-                crate::memory::resident_bytes().map_or(0, |r| r + coefficient_bytes + in_flight);
-            let budget = adjoint_budget(
-                opts.max_memory_bytes,
-                opts.max_memory_given,
-                held,
-                resident,
-                op.adjoint_bytes_per_sensor() * op.adjoint_block_size(0) as u64,
-            )?;
-            let block = op.adjoint_block_size(budget);
-            stats.block_sensors = block.min(k);
-            let mut fresh: Vec<NodeData> = todo
-                .iter()
-                .map(|_| NodeData {
-                    indirect: Arc::new(vec![0f32; (parts + 1) * k]),
-                    ..NodeData::default()
-                })
-                .collect();
-            let passes = k.div_ceil(block) * todo.len();
-            progress(0, passes);
-            for (b, s0) in (0..k).step_by(block).enumerate() {
-                if stop.load(std::sync::atomic::Ordering::SeqCst) {
-                    return Err(crate::Error::Interrupted);
-                }
-                let xb = op.adjoint_block(s0..(s0 + block).min(k));
-                stats.sweeps += xb.sweeps;
-                let w = xb.sensors.len();
-                for (c, (ids, outs)) in todo.chunks(BATCH).zip(fresh.chunks_mut(BATCH)).enumerate()
-                {
-                    if stop.load(std::sync::atomic::Ordering::SeqCst) {
-                        return Err(crate::Error::Interrupted);
-                    }
-                    // The batch's projections and mesh weights in parallel, then the
-                    // block's responses applied to all of them in one pass.
-                    let terms: Vec<DirectionTerms> = ids
-                        .par_iter()
-                        .zip(outs.par_iter_mut())
-                        .map(|(&i, nd)| {
-                            let src = &list[i];
-                            let d = dirs.fetch(src, res_of(src));
-                            if s0 == 0 && !src.is_sun() {
-                                nd.direct = direct_rows(&d.sensors, k);
-                            }
-                            op.direction_terms(&mesh_weights(scene, op, src, &d.record))
-                        })
-                        .collect();
-                    let vs = xb.apply_many(op, &terms);
-                    for (nd, v) in outs.iter_mut().zip(vs) {
-                        for row in 0..=parts {
-                            Arc::make_mut(&mut nd.indirect)[row * k + s0..row * k + s0 + w]
-                                .copy_from_slice(&v[row * w..(row + 1) * w]);
-                        }
-                    }
-                    progress(b * todo.len() + (todo.len()).min((c + 1) * BATCH), passes);
-                }
-            }
-            for (&i, nd) in todo.iter().zip(fresh) {
-                let src = &list[i];
-                if let Some(key) = record_key(hash, dirs, src, res_of(src)) {
-                    if store.is_enabled() {
-                        let mut sections = vec![Section::of(TAG_VALUES, &nd.indirect)];
-                        if !nd.direct.is_empty() {
-                            sections.push(Section::of(TAG_DIRECT, &nd.direct));
-                        }
-                        store.put(&key, &cache::encode(&key, &sections));
-                    }
-                }
-                data[i] = Some(nd);
-            }
-        }
-        let solved: Vec<NodeData> = data
-            .into_iter()
-            .map(|d| d.expect("every direction prepared"))
-            .collect();
-        let deep = indirect_ancestors::deep_direct(scene, dirs, hash, &plan.deep, res_of);
-        let nodes: HashMap<SourceKey, NodeData, ahash::RandomState> =
-            indirect_ancestors::assemble(&union, list, solved, &plan.deep, deep, parts)
-                .into_iter()
-                .map(|(key, d)| {
-                    (
-                        key,
-                        if opts.values_only {
-                            d.values_only(parts, k)
-                        } else {
-                            d
-                        },
-                    )
-                })
-                .collect();
-        // Interreflected rows shared by several nodes counted once.
-        let mut shared = std::collections::HashSet::new();
-        stats.bytes = nodes
-            .values()
-            .map(|n| {
-                let ind = if shared.insert(Arc::as_ptr(&n.indirect)) {
-                    n.indirect.len()
-                } else {
-                    0
-                };
-                4 * (n.direct.len() + ind + n.direction_err.len()) as u64
-            })
-            .sum();
-        stats.seconds = t0.elapsed().as_secs_f64();
-        let c = Coefficients {
-            sensors: k,
-            parts,
-            grid,
-            nodes,
-            coarse: Mutex::new(HashMap::default()),
-            ground: Default::default(),
-            stats,
-        };
-        Ok((c, skies))
-    }
-
     /// Sensor values of `steps` from the coefficients, with `coarse_dirs` the coarser
     /// level's directions (sensor responses only) and `iteration_rel` the relative error
     /// of the interreflected part (the solves' tolerance and the responses' rounding).
@@ -621,40 +394,4 @@ impl Coefficients {
             .or_insert(d)
             .clone()
     }
-}
-
-/// What coefficient records depend on: the directions' hash (geometry, glazing, sensors,
-/// projection parameters), the operator's key, and every triangle's reflectance and
-/// emission.
-fn coefficient_hash(scene: &Scene, dirs: &Directions, params: &TransportParams) -> SceneHash {
-    let mut extra = b"daylight coefficients v".to_vec();
-    extra.extend_from_slice(&COEFFICIENTS_VERSION.to_le_bytes());
-    extra.extend_from_slice(&dirs.hash().0);
-    extra.extend_from_slice(&super::operator::key(scene, params).to_bytes());
-    // Each triangle's reflectance and emission: what, with the mesh the operator's key
-    // fixes, sets every row's ρ and exitance.
-    for t in &scene.triangles {
-        let m = &scene.materials[t.material as usize];
-        for v in [m.reflectance(), m.ke] {
-            for c in v.to_array() {
-                extra.extend_from_slice(&c.to_bits().to_le_bytes());
-            }
-        }
-    }
-    extra.extend_from_slice(&(crate::radiosity::response::BLOCK as u64).to_le_bytes());
-    cache::scene_hash(scene, &dirs.quality().projection, &extra)
-}
-
-fn record_key(hash: SceneHash, dirs: &Directions, src: &Source, res: u32) -> Option<RecordKey> {
-    let own = RecordKey::for_source(dirs.hash(), src.key, res)?;
-    // The direction's own kind goes into the hash: sky, ground and grid ids may overlap.
-    let mut h = blake3::Hasher::new();
-    h.update(&hash.0);
-    h.update(&[own.kind]);
-    Some(RecordKey {
-        scene: SceneHash(*h.finalize().as_bytes()),
-        kind: cache::KIND_COEFFICIENTS,
-        direction: own.direction,
-        resolution: res,
-    })
 }

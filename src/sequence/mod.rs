@@ -25,6 +25,7 @@ pub mod instant;
 pub mod df;
 pub mod convergence;
 pub mod annual;
+mod annual_options;
 mod annual_steps;
 pub mod merge;
 pub mod light_paths;

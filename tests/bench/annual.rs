@@ -32,7 +32,8 @@
 //! `--point TRIANGLES:SENSORS` (repeatable: only these sweep points, e.g. `10000:10000`).
 //! `--point 100000:10000` also selects the large point that the sweep leaves out unless
 //! asked (issue 28: 100 000 triangles, 10 000 sensors); `--max-memory SIZE` passes the
-//! cap to every daystep run (as `daystep annual --max-memory`).
+//! cap to every daystep run (as `daystep annual --max-memory`), `--cache-size SIZE` the
+//! cache folder's limit (as `daystep --cache-size`; the large points outgrow 2 GiB).
 //!
 //! Every daystep run is a child process (this binary again, `--child …`) so that its peak
 //! resident memory (VmHWM, read by the child at its end) and wall time are its own; the
@@ -83,6 +84,8 @@ struct Opts {
     points: Vec<(usize, usize)>,
     /// `--max-memory SIZE`: daystep's memory cap, bytes (None: the machine's default).
     max_memory: Option<u64>,
+    /// `--cache-size SIZE`: the cache folder's limit, bytes (None: `DEFAULT_MAX_BYTES`).
+    cache_bytes: Option<u64>,
 }
 
 fn parse_opts(args: &[String]) -> Opts {
@@ -100,6 +103,7 @@ fn parse_opts(args: &[String]) -> Opts {
         max_triangles: usize::MAX,
         points: Vec::new(),
         max_memory: None,
+        cache_bytes: None,
     };
     let date = |s: &str| {
         NaiveDate::parse_from_str(s, "%Y-%m-%d")
@@ -134,6 +138,12 @@ fn parse_opts(args: &[String]) -> Opts {
                     .unwrap_or_else(|e| panic!("--max-memory: {e}"));
                 o.max_memory = Some(cap.bytes);
             }
+            "--cache-size" => {
+                let v = value();
+                let b = daystep::memory::parse_size_flag("--cache-size", &v)
+                    .unwrap_or_else(|e| panic!("{e}"));
+                o.cache_bytes = Some(b);
+            }
             "--point" => {
                 let v = value();
                 let (t, s) = v
@@ -145,7 +155,7 @@ fn parse_opts(args: &[String]) -> Opts {
                 "unknown argument {other:?}; modes: --office-only, --no-radiance, --scaling \
                  (trial options: --days N, --start/--end YYYY-MM-DD, --radiance-nproc N, \
                  --radiance-opts \"…\", --max-sensors N, --max-triangles N, \
-                 --point TRIANGLES:SENSORS, --max-memory SIZE)"
+                 --point TRIANGLES:SENSORS, --max-memory SIZE, --cache-size SIZE)"
             ),
         }
     }
@@ -159,6 +169,8 @@ struct Period {
     end: Option<NaiveDate>,
     /// Bytes; `None`: the machine's default.
     max_memory: Option<u64>,
+    /// The cache folder's limit, bytes; `None`: `DEFAULT_MAX_BYTES`.
+    cache_bytes: Option<u64>,
 }
 
 impl Period {
@@ -170,6 +182,7 @@ impl Period {
                 start: Some(s),
                 end: Some(s + chrono::Days::new(u64::from(n.max(1) - 1))),
                 max_memory: o.max_memory,
+                cache_bytes: o.cache_bytes,
             };
         }
         if o.scaling && o.start.is_none() && o.end.is_none() {
@@ -177,12 +190,14 @@ impl Period {
                 start: Some(june15),
                 end: Some(june15 + chrono::Days::new(6)),
                 max_memory: o.max_memory,
+                cache_bytes: o.cache_bytes,
             };
         }
         Period {
             start: o.start,
             end: o.end,
             max_memory: o.max_memory,
+            cache_bytes: o.cache_bytes,
         }
     }
 
@@ -207,6 +222,9 @@ impl Period {
         }
         if let Some(b) = self.max_memory {
             v.extend(["--max-memory".into(), b.to_string()]);
+        }
+        if let Some(b) = self.cache_bytes {
+            v.extend(["--cache-size".into(), b.to_string()]);
         }
         v
     }
@@ -249,7 +267,7 @@ fn child(args: &[String]) {
     let scene = Scene::load(&scene).unwrap();
     let w = read_weather(&weather).unwrap();
     let load_s = t0.elapsed().as_secs_f64();
-    let store = Store::open(&cache, DEFAULT_MAX_BYTES);
+    let store = Store::open(&cache, o.cache_bytes.unwrap_or(DEFAULT_MAX_BYTES));
     let stop = AtomicBool::new(false);
     let quiet = |_: usize, _: usize| {};
     let opts = AnnualOptions {
