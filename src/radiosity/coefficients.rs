@@ -322,7 +322,7 @@ impl AdjointBlock {
 
 /// One direction's source terms ([`Transport::direction_terms`]), ready for
 /// [`AdjointBlock::apply_many`].
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default)]
 pub struct DirectionTerms(Terms);
 
 impl DirectionTerms {
@@ -356,13 +356,19 @@ impl DirectionTerms {
     /// # Errors
     /// What `r` returns (a short read is `UnexpectedEof`).
     pub fn read_from(r: &mut impl std::io::Read) -> std::io::Result<DirectionTerms> {
+        use std::io::Read;
         let mut counts = [0u8; 8];
         r.read_exact(&mut counts)?;
         let word = |b: &[u8]| u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
         let mut buf = Vec::new();
         let mut list = |n: u32| -> std::io::Result<Vec<(u32, [f32; 3])>> {
-            buf.resize(16 * n as usize, 0);
-            r.read_exact(&mut buf)?;
+            // Read as the bytes come, not into a buffer sized by the count: a damaged
+            // count then ends in a short read, not in a huge allocation.
+            buf.clear();
+            r.by_ref().take(16 * u64::from(n)).read_to_end(&mut buf)?;
+            if buf.len() != 16 * n as usize {
+                return Err(std::io::ErrorKind::UnexpectedEof.into());
+            }
             Ok(buf
                 .chunks_exact(16)
                 .map(|e| {
@@ -435,7 +441,7 @@ mod tests {
     }
 
     #[test]
-    fn direction_terms_read_back_bit_for_bit_and_a_short_file_is_an_error() {
+    fn direction_terms_read_back_bit_for_bit_and_a_short_or_damaged_file_is_an_error() {
         let t = DirectionTerms((
             vec![
                 (0, [1.0, -0.0, f32::MIN_POSITIVE]),
@@ -455,6 +461,14 @@ mod tests {
             assert_eq!(bits(&DirectionTerms::read_from(&mut r).unwrap()), bits(x));
         }
         assert!(DirectionTerms::read_from(&mut r).is_err(), "nothing left");
+        let mut damaged = buf.clone();
+        damaged[..4].copy_from_slice(&u32::MAX.to_le_bytes());
+        let e = DirectionTerms::read_from(&mut &damaged[..]).unwrap_err();
+        assert_eq!(
+            e.kind(),
+            std::io::ErrorKind::UnexpectedEof,
+            "a count past the end"
+        );
         let n = t.encoded_bytes() as usize;
         for cut in [0, 3, 8, n - 1] {
             let mut short = &buf[..cut];
