@@ -38,17 +38,18 @@ impl Coefficients {
     /// cut (read from the cache or computed, through `dirs` for the projections and
     /// direct responses and `op` for the interreflection) and the sun-grid vertices
     /// around each step's sun, with the adjoint responses sized to what the cap
-    /// `opts.max_memory_bytes` leaves ([`adjoint_budget`]; 0: no cap). Also returns each step's sky (`None`
-    /// where it cannot be built), so the steps need not build them again. With
-    /// `opts.values_only` only what the values need is kept ([`Self::evaluate_values_batch`]: the
-    /// children's direct rows and the parts' mean, 5 rows per node instead of 14); the
-    /// cache records are the same. `watch` follows the work and can stop it.
+    /// `opts.max_memory_bytes` leaves ([`adjoint_budget`]; 0: no cap). Also returns each
+    /// step's sky (`None` where it cannot be built), so the steps need not build them
+    /// again. With `opts.values_only` only what the values need is kept
+    /// ([`Self::evaluate_values_batch`]: the children's direct rows and the parts' mean, 5
+    /// rows per node instead of 14); the cache records are the same. `watch` follows the
+    /// work and can stop it.
     ///
     /// # Errors
     /// [`crate::Error::Interrupted`] once `watch.stop` is set (nothing of the coefficients is
     /// kept: a direction's are stored when every block is done). The coefficients, one
-    /// adjoint block and the directions in flight cannot fit
-    /// the cap beside what the process already holds ([`crate::Error::Input`]).
+    /// adjoint block and the directions in flight cannot fit the cap beside what the
+    /// process already holds ([`crate::Error::Input`]).
     pub(in crate::sequence) fn prepare(
         scene: &Scene,
         dirs: &Directions,
@@ -155,13 +156,19 @@ impl Coefficients {
                     ..NodeData::default()
                 })
                 .collect();
-            let passes = k.div_ceil(block) * todo.len();
+            let blocks = k.div_ceil(block);
+            let passes = blocks * todo.len();
             progress(0, passes);
-            let mut spill = TermsSpill::new(k.div_ceil(block));
-            for (b, s0) in (0..k).step_by(block).enumerate() {
+            let mut spill = TermsSpill::new(blocks);
+            let go_on = || {
                 if stop.load(std::sync::atomic::Ordering::SeqCst) {
-                    return Err(crate::Error::Interrupted);
+                    Err(crate::Error::Interrupted)
+                } else {
+                    Ok(())
                 }
+            };
+            for (b, s0) in (0..k).step_by(block).enumerate() {
+                go_on()?;
                 if b > 0 {
                     spill.rewind();
                 }
@@ -170,12 +177,10 @@ impl Coefficients {
                 let w = xb.sensors.len();
                 for (c, (ids, outs)) in todo.chunks(BATCH).zip(fresh.chunks_mut(BATCH)).enumerate()
                 {
-                    if stop.load(std::sync::atomic::Ordering::SeqCst) {
-                        return Err(crate::Error::Interrupted);
-                    }
-                    // The batch's projections and mesh weights in parallel, then the
+                    go_on()?;
+                    // The batch's projections and mesh weights in parallel (the later
+                    // blocks read the terms the first one made, [`TermsSpill`]), then the
                     // block's responses applied to all of them in one pass.
-                    // Later blocks read the terms the first one made ([`TermsSpill`]).
                     let terms = spill.read(ids.len()).unwrap_or_else(|| {
                         ids.par_iter()
                             .zip(outs.par_iter_mut())
@@ -189,9 +194,7 @@ impl Coefficients {
                             })
                             .collect()
                     });
-                    if s0 == 0 {
-                        spill.write(&terms);
-                    }
+                    spill.write(&terms);
                     let vs = xb.apply_many(op, &terms);
                     for (nd, v) in outs.iter_mut().zip(vs) {
                         for row in 0..=parts {

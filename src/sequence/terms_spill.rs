@@ -72,7 +72,7 @@ impl TermsSpill {
         got.ok()
     }
 
-    /// Keeps the terms the first block made.
+    /// Keeps the terms the first block made; a no-op in the later blocks (they read).
     pub fn write(&mut self, terms: &[DirectionTerms]) {
         let State::Writing(w) = &mut self.state else {
             return;

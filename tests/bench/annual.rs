@@ -176,29 +176,28 @@ struct Period {
 impl Period {
     fn resolve(o: &Opts) -> Period {
         let june15 = NaiveDate::from_ymd_opt(JUNE_15.0, JUNE_15.1, JUNE_15.2).expect("date");
+        let given = Period {
+            start: o.start,
+            end: o.end,
+            max_memory: o.max_memory,
+            cache_bytes: o.cache_bytes,
+        };
         if let Some(n) = o.days {
             let s = o.start.unwrap_or(june15);
             return Period {
                 start: Some(s),
                 end: Some(s + chrono::Days::new(u64::from(n.max(1) - 1))),
-                max_memory: o.max_memory,
-                cache_bytes: o.cache_bytes,
+                ..given
             };
         }
         if o.scaling && o.start.is_none() && o.end.is_none() {
             return Period {
                 start: Some(june15),
                 end: Some(june15 + chrono::Days::new(6)),
-                max_memory: o.max_memory,
-                cache_bytes: o.cache_bytes,
+                ..given
             };
         }
-        Period {
-            start: o.start,
-            end: o.end,
-            max_memory: o.max_memory,
-            cache_bytes: o.cache_bytes,
-        }
+        given
     }
 
     fn label(&self) -> String {
