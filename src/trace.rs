@@ -193,15 +193,29 @@ impl Tracer {
     /// the building's 1 620 sensors by up to 7e-4; the interreflection's random rays give
     /// the same values either way.
     pub fn walk(&self, origin: DVec3, dir: DVec3, incidence: DVec3, power: Rgb) -> Outcome {
+        // Most rays stop at the first surface they meet: one closest-hit query, the first
+        // hit of the ordered list below, settles them.
+        let first = self.bvh.closest_hit(origin, dir, T_MIN_M, f64::INFINITY);
+        self.walk_from(origin, dir, incidence, power, first)
+    }
+
+    /// [`Self::walk`] given the ray's closest hit `first` (what [`Bvh::closest_hit`]
+    /// returned for it), so a caller that has it does not search for it again.
+    fn walk_from(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        incidence: DVec3,
+        power: Rgb,
+        first: Option<Hit>,
+    ) -> Outcome {
         let mut out = Outcome {
             end: End::Escaped,
             power,
             glazing_loss: Rgb::ZERO,
             panes: 0,
         };
-        // Most rays stop at the first surface they meet: one closest-hit query, the first
-        // hit of the ordered list below, settles them.
-        match self.bvh.closest_hit(origin, dir, T_MIN_M, f64::INFINITY) {
+        match first {
             None => return out,
             Some(h) if !self.material_of(h.triangle).is_glazing() => {
                 out.end = self.opaque_end(origin, dir, h);
@@ -209,8 +223,10 @@ impl Tracer {
             }
             Some(_) => {}
         }
+        // The walk stops at the first opaque triangle: the traversal need not look past it.
+        let opaque = |t: u32| !self.material_of(t).is_glazing();
         self.bvh
-            .hits_in_order(origin, dir, T_MIN_M, f64::INFINITY, |h| {
+            .hits_in_order_until(origin, dir, T_MIN_M, f64::INFINITY, opaque, |h| {
                 let m = self.material_of(h.triangle);
                 if !m.is_glazing() {
                     out.end = self.opaque_end(origin, dir, h);
@@ -299,7 +315,7 @@ impl Tracer {
                 glazing_loss: Rgb::ZERO,
                 panes: 0,
             },
-            _ => self.walk(origin, dir, dir, power),
+            first => self.walk_from(origin, dir, dir, power, first),
         }
     }
 

@@ -36,6 +36,49 @@ fn all_hits(bvh: &Bvh, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> Vec<Hit> {
     v
 }
 
+/// What a visit that stops at its first hit on a `stops` triangle sees through
+/// [`Bvh::hits_in_order_until`].
+fn visits_until(
+    bvh: &Bvh,
+    o: DVec3,
+    d: DVec3,
+    t_min: f64,
+    t_max: f64,
+    stops: impl Fn(u32) -> bool + Copy,
+) -> Vec<Hit> {
+    let mut v = Vec::new();
+    bvh.hits_in_order_until(o, d, t_min, t_max, stops, |h| {
+        v.push(h);
+        !stops(h.triangle)
+    });
+    v
+}
+
+#[test]
+fn pruned_visits_keep_a_stop_dropped_as_a_coplanar_duplicate() {
+    // A pane (0, 1) with an opaque copy of itself (2, 3) in the same place and
+    // orientation, and an opaque square beyond (4, 5). The copy's hit is the nearest stop,
+    // but the list keeps the pane's (lower index) and drops it: the walk goes on to the
+    // square, with or without pruning.
+    let tris: Vec<_> = square(1.0)
+        .into_iter()
+        .chain(square(1.0))
+        .chain(square(3.0))
+        .collect();
+    let bvh = Bvh::build(&tris);
+    let stops = |t: u32| t >= 2;
+    let o = DVec3::new(0.3, 0.6, 0.0);
+    let want = all_hits(&bvh, o, DVec3::Z, 0.0, f64::INFINITY);
+    assert_eq!(
+        want.iter().map(|h| h.triangle).collect::<Vec<_>>(),
+        vec![1, 5]
+    );
+    assert_eq!(
+        visits_until(&bvh, o, DVec3::Z, 0.0, f64::INFINITY, stops),
+        want
+    );
+}
+
 /// Reference: the same intersection test over every triangle, no hierarchy.
 fn brute_hits(tris: &[[DVec3; 3]], o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> Vec<Hit> {
     let ray = Ray::new(o, d);
@@ -320,6 +363,12 @@ fn bvh_equals_brute_force_on_random_rays() {
         assert_eq!(got, want, "ray {i}");
         assert_eq!(bvh.any_hit(o, d, t_min, t_max), !want.is_empty());
         assert_eq!(bvh.closest_hit(o, d, t_min, t_max), want.first().copied());
+        // A visit that stops at its first "opaque" triangle (every third) sees the same
+        // hits when the traversal prunes past it.
+        let stops = |t: u32| t % 3 == 0;
+        let until = visits_until(&bvh, o, d, t_min, t_max, stops);
+        let end = want.iter().position(|h| stops(h.triangle));
+        assert_eq!(until, want[..end.map_or(want.len(), |e| e + 1)], "ray {i}");
         total += want.len();
     }
     assert!(total > 500, "test should exercise many hits, got {total}");
