@@ -275,7 +275,11 @@ fn check(files: &[(std::path::PathBuf, String)]) -> (Vec<String>, HashMap<String
     let mut checked: HashMap<String, usize> = HashMap::new();
     for (rel, text) in files {
         let first = rel.iter().next().unwrap().to_string_lossy();
-        let module = first.trim_end_matches(".rs").to_string();
+        // A top-level module's tests in `x_tests.rs` (`#[path]`) belong to module `x`.
+        let module = first
+            .trim_end_matches(".rs")
+            .trim_end_matches("_tests")
+            .to_string();
         let Some(own) = layer_of(&module) else {
             continue;
         };

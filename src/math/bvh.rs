@@ -57,6 +57,8 @@ pub struct Bvh {
     nodes: Vec<Node>,
     /// Hittable triangles in leaf order.
     tris: Vec<[DVec3; 3]>,
+    /// Unit normal of each entry of `tris` ([`face_normal`]), so a hit does not work it out.
+    normals: Vec<DVec3>,
     /// Input index of each entry of `tris`.
     ids: Vec<u32>,
     /// Number of triangles passed to [`Bvh::build`], including degenerate ones.
@@ -125,9 +127,22 @@ impl Ray {
         (near <= far).then_some(near)
     }
 
-    /// Watertight two-sided test: `(t, cos, unit normal)` for a hit with t_min < t < t_max.
-    #[inline]
+    /// [`Self::hit_triangle_with`] working out the normal first (the tests' brute force).
+    #[cfg(test)]
     fn hit_triangle(&self, v: &[DVec3; 3], t_min: f64, t_max: f64) -> Option<(f64, f64, DVec3)> {
+        self.hit_triangle_with(v, face_normal(v), t_min, t_max)
+    }
+
+    /// Watertight two-sided test of the triangle `v` with unit normal `normal`:
+    /// `(t, cos, normal)` for a hit with t_min < t < t_max.
+    #[inline]
+    fn hit_triangle_with(
+        &self,
+        v: &[DVec3; 3],
+        normal: DVec3,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<(f64, f64, DVec3)> {
         let a = v[0] - self.org;
         let b = v[1] - self.org;
         let c = v[2] - self.org;
@@ -154,12 +169,27 @@ impl Ray {
         if !(t > t_min && t < t_max) {
             return None;
         }
-        let normal = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
         let cos = self.dir.dot(normal);
         if cos.is_nan() || cos.abs() <= GRAZING_COS {
             return None;
         }
         Some((t, cos, normal))
+    }
+}
+
+/// Unit normal of a triangle, by its vertices' winding.
+fn face_normal(v: &[DVec3; 3]) -> DVec3 {
+    (v[1] - v[0]).cross(v[2] - v[0]).normalize()
+}
+
+/// The bound a leaf's triangles are tested up to: `t_far` itself, or up to it inclusive
+/// once a hit has shrunk it there (the next f64 above), so that a hit at the same
+/// distance is still seen.
+fn test_limit(found: bool, t_far: f64) -> f64 {
+    if found {
+        next_up(t_far)
+    } else {
+        t_far
     }
 }
 
@@ -226,6 +256,12 @@ impl Bvh {
     /// Number of triangles that can be hit (the input minus zero-area ones).
     pub fn hittable_len(&self) -> usize {
         self.tris.len()
+    }
+
+    /// The ray's hit on leaf-order triangle `i` within (t_min, t_max), if any.
+    #[inline]
+    fn hit(&self, ray: &Ray, i: usize, t_min: f64, t_max: f64) -> Option<(f64, f64, DVec3)> {
+        ray.hit_triangle_with(&self.tris[i], self.normals[i], t_min, t_max)
     }
 
     /// Iterative near-first traversal. `leaf(leaf_index, &mut t_max)` may shrink `t_max`
@@ -348,7 +384,7 @@ impl Bvh {
         // simpler than an ordered traversal that emits hits as soon as they are final.
         let mut hits: Vec<(Hit, DVec3)> = Vec::new();
         self.traverse(&ray, t_min, t_max, |i, _| {
-            if let Some((t, cos, n)) = ray.hit_triangle(&self.tris[i], t_min, t_max) {
+            if let Some((t, cos, n)) = self.hit(&ray, i, t_min, t_max) {
                 hits.push((
                     Hit {
                         triangle: self.ids[i],
@@ -386,14 +422,9 @@ impl Bvh {
         let mut hits: Vec<(Hit, DVec3)> = Vec::new();
         let mut stop_t: Option<f64> = None;
         self.traverse(&ray, t_min, t_max, |i, t_far| {
-            // As in closest_hit: once a stop is found, test up to it inclusive, so every
-            // hit at its distance is listed.
-            let limit = if stop_t.is_some() {
-                next_up(*t_far)
-            } else {
-                *t_far
-            };
-            if let Some((t, cos, n)) = ray.hit_triangle(&self.tris[i], t_min, limit) {
+            // Once a stop is found, up to it inclusive: every hit at its distance is listed.
+            let limit = test_limit(stop_t.is_some(), *t_far);
+            if let Some((t, cos, n)) = self.hit(&ray, i, t_min, limit) {
                 let triangle = self.ids[i];
                 hits.push((Hit { triangle, t, cos }, n));
                 if stops(triangle) && stop_t.is_none_or(|s| t < s) {
@@ -426,7 +457,7 @@ impl Bvh {
         let ray = Ray::new(origin, dir);
         let mut hits = Vec::new();
         self.traverse(&ray, t_min, t_max, |i, _| {
-            if let Some((t, cos, _)) = ray.hit_triangle(&self.tris[i], t_min, t_max) {
+            if let Some((t, cos, _)) = self.hit(&ray, i, t_min, t_max) {
                 hits.push(Hit {
                     triangle: self.ids[i],
                     t,
@@ -444,14 +475,10 @@ impl Bvh {
         let ray = Ray::new(origin, dir);
         let mut best: Option<Hit> = None;
         self.traverse(&ray, t_min, t_max, |i, t_far| {
-            // `t_far` shrinks to the best hit so far; test up to it inclusive (nextafter)
-            // so an equal-t hit with a lower index can still win the tie.
-            let limit = if best.is_some() {
-                next_up(*t_far)
-            } else {
-                *t_far
-            };
-            if let Some((t, cos, _)) = ray.hit_triangle(&self.tris[i], t_min, limit) {
+            // `t_far` shrinks to the best hit so far; an equal-t hit with a lower index can
+            // still win the tie.
+            let limit = test_limit(best.is_some(), *t_far);
+            if let Some((t, cos, _)) = self.hit(&ray, i, t_min, limit) {
                 let id = self.ids[i];
                 let better = match best {
                     None => true,
@@ -477,7 +504,7 @@ impl Bvh {
         let ray = Ray::new(origin, dir);
         let mut found = false;
         self.traverse(&ray, t_min, t_max, |i, _| {
-            found = ray.hit_triangle(&self.tris[i], t_min, t_max).is_some();
+            found = self.hit(&ray, i, t_min, t_max).is_some();
             !found
         });
         found

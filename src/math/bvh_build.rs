@@ -92,6 +92,7 @@ impl Bvh {
             }
         }
         bvh.tris = refs.iter().map(|&i| triangles[i as usize]).collect();
+        bvh.normals = bvh.tris.iter().map(face_normal).collect();
         bvh.ids = refs;
         bvh.nodes = nodes;
         bvh
