@@ -184,8 +184,9 @@ impl Tracer {
     /// Follows the ray `origin + t·dir` (unit `dir`) carrying `power`: each glazing pane
     /// passes it on with τ at the angle between its normal and unit `incidence`; the first
     /// opaque triangle ends it. The one walk every user shares: one ray from `origin`,
-    /// every triangle beyond [`T_MIN_M`] in order of distance ([`Bvh::hits_in_order`]:
-    /// coplanar duplicates at a shared edge once). It does not restart at a pane, so an
+    /// every triangle beyond [`T_MIN_M`] up to the first opaque one, in order of distance
+    /// ([`Bvh::hits_in_order_until`]: coplanar duplicates at a shared edge once, nothing
+    /// past the first opaque hit searched). It does not restart at a pane, so an
     /// opaque triangle touching the pane (a window head met exactly at its edge) stops the
     /// ray. The interreflection's former walk restarted [`T_MIN_M`] beyond each pane and
     /// stepped over such a triangle: tried for the sensors, whose rays meet window edges
