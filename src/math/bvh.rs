@@ -177,6 +177,11 @@ impl Ray {
     }
 }
 
+/// The stop rule of a walk that lists every hit ([`Bvh::hits_in_order`]).
+fn never(_: u32) -> bool {
+    false
+}
+
 /// Unit normal of a triangle, by its vertices' winding.
 fn face_normal(v: &[DVec3; 3]) -> DVec3 {
     (v[1] - v[0]).cross(v[2] - v[0]).normalize()
@@ -377,31 +382,9 @@ impl Bvh {
         dir: DVec3,
         t_min: f64,
         t_max: f64,
-        mut visit: impl FnMut(Hit) -> bool,
+        visit: impl FnMut(Hit) -> bool,
     ) {
-        let ray = Ray::new(origin, dir);
-        // Collect-then-sort: rays in buildings cross few surfaces, so this is cheaper and
-        // simpler than an ordered traversal that emits hits as soon as they are final.
-        let mut hits: Vec<(Hit, DVec3)> = Vec::new();
-        self.traverse(&ray, t_min, t_max, |i, _| {
-            if let Some((t, cos, n)) = self.hit(&ray, i, t_min, t_max) {
-                hits.push((
-                    Hit {
-                        triangle: self.ids[i],
-                        t,
-                        cos,
-                    },
-                    n,
-                ));
-            }
-            true
-        });
-        sort_and_dedup(&mut hits);
-        for (h, _) in hits {
-            if !visit(h) {
-                return;
-            }
-        }
+        self.hits_in_order_until(origin, dir, t_min, t_max, never, visit);
     }
 
     /// [`Self::hits_in_order`] for a visit that stops at the first hit on a triangle for
@@ -419,6 +402,8 @@ impl Bvh {
         mut visit: impl FnMut(Hit) -> bool,
     ) {
         let ray = Ray::new(origin, dir);
+        // Collect-then-sort: rays in buildings cross few surfaces, so this is cheaper and
+        // simpler than an ordered traversal that emits hits as soon as they are final.
         let mut hits: Vec<(Hit, DVec3)> = Vec::new();
         let mut stop_t: Option<f64> = None;
         self.traverse(&ray, t_min, t_max, |i, t_far| {
@@ -441,7 +426,7 @@ impl Bvh {
         }
         sort_and_dedup(&mut hits);
         if stop_t.is_some() && !hits.iter().any(|(h, _)| stops(h.triangle)) {
-            return self.hits_in_order(origin, dir, t_min, t_max, visit);
+            return self.hits_in_order_until(origin, dir, t_min, t_max, never, visit);
         }
         for (h, _) in hits {
             if !visit(h) {
