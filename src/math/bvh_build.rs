@@ -67,8 +67,7 @@ impl Bvh {
                 clo = clo.min(cents[i as usize]);
                 chi = chi.max(cents[i as usize]);
             }
-            nodes[ni].lo = lo - pad;
-            nodes[ni].hi = hi + pad;
+            nodes[ni].set_box(lo - pad, hi + pad);
             let n = items.len();
             let split = if n <= MIN_LEAF {
                 None

@@ -383,3 +383,66 @@ fn empty_bvh() {
         .closest_hit(DVec3::ZERO, DVec3::Z, 0.0, f64::INFINITY)
         .is_none());
 }
+
+#[test]
+fn f32_boxes_round_outwards_by_at_most_one_step() {
+    let seed = 0xb0c5;
+    for i in 0..20_000u64 {
+        let mag = 10f64.powf(uniform(seed, 0, i) * 24.0 - 12.0);
+        let x = match i % 4 {
+            0 => mag,
+            1 => -mag,
+            2 => (mag as f32) as f64, // exactly representable
+            _ => 0.0,
+        };
+        let (lo, hi) = (f32_toward(x, false), f32_toward(x, true));
+        assert!(lo as f64 <= x && x <= hi as f64, "{x}: {lo} {hi}");
+        if (x as f32) as f64 == x {
+            assert_eq!((lo, hi), (x as f32, x as f32));
+        } else {
+            assert_eq!(hi, next_up_f32(lo), "{x}");
+        }
+    }
+}
+
+#[test]
+fn every_node_box_holds_its_triangles_far_from_the_origin() {
+    // f32 boxes at 1e6 m are 6 cm apart: the rounding must still hold every vertex.
+    let off = DVec3::new(1.0e6, -2.5e6, 3.0e5);
+    let r = |stream: u64, i: u64| uniform(0xfa7, stream, i);
+    let tris: Vec<[DVec3; 3]> = (0..300u64)
+        .map(|i| {
+            let c = off + (DVec3::new(r(0, i), r(1, i), r(2, i)) - 0.5) * 50.0;
+            [0, 1, 2].map(|k| c + (DVec3::new(r(3 + k, i), r(6 + k, i), r(9 + k, i)) - 0.5))
+        })
+        .collect();
+    let bvh = Bvh::build(&tris);
+    // Walk down from the root: every node's box contains its subtree's vertices.
+    fn check(bvh: &Bvh, ni: usize) -> (DVec3, DVec3) {
+        let n = &bvh.nodes[ni];
+        let (lo, hi) = if n.count > 0 {
+            let s = n.start as usize;
+            let vs = bvh.tris[s..s + n.count as usize].iter().flatten();
+            vs.fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(a, b), v| {
+                (a.min(*v), b.max(*v))
+            })
+        } else {
+            let (a, b) = check(bvh, n.start as usize);
+            let (c, d) = check(bvh, n.start as usize + 1);
+            (a.min(c), b.max(d))
+        };
+        assert!(
+            n.lo().cmple(lo).all() && n.hi().cmpge(hi).all(),
+            "node {ni}"
+        );
+        (lo, hi)
+    }
+    check(&bvh, 0);
+    // And rays aimed at vertices still find them.
+    for (i, t) in tris.iter().enumerate().take(100) {
+        let target = t[i % 3];
+        let o = target + DVec3::new(0.3, -0.2, 7.0);
+        let d = (target - o).normalize();
+        assert!(bvh.any_hit(o, d, 0.0, 20.0), "triangle {i}");
+    }
+}
