@@ -34,7 +34,7 @@
 //! site) · L2 sky, sources · L3 hierarchy · L4 projection · L5 transfer, cache, trace ·
 //! L6 sensors, radiosity · L7 metrics, export, render (export may use metrics) · L8 sequence · L9 cli.
 #![warn(missing_docs)]
-#![deny(unsafe_code)] // exceptions: cache::store::map_readonly, and the AVX2 dispatch of sequence::coefficient_sums and radiosity::response
+#![deny(unsafe_code)] // exceptions: cache::store::map_readonly, the AVX2 dispatch of sequence::coefficient_sums and radiosity::response, and math::bvh's uninitialised traversal stack
 
 // Modules in pipeline order (rustfmt.toml keeps this order).
 
