@@ -10,7 +10,14 @@ use std::path::Path;
 /// The top-level modules of `src/` by layer, lowest first (lib.rs's table). A new module
 /// goes into its layer's list.
 const LAYERS: &[&[&str]] = &[
-    &["error", "files", "math", "photometry", "memory"],
+    &[
+        "error",
+        "files",
+        "math",
+        "photometry",
+        "memory",
+        "allocator",
+    ],
     &["site", "scene", "weather"],
     &["sky", "sources"],
     &["hierarchy"],

@@ -79,6 +79,7 @@ fn exit_code(result: Result<()>) -> i32 {
 
 /// Parses the process arguments, runs, and returns the exit code.
 pub fn main() -> i32 {
+    crate::allocator::keep_freed_memory();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {

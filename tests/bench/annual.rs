@@ -262,6 +262,8 @@ fn peak_rss_mb() -> f64 {
 fn child(args: &[String]) {
     let [scene, weather, cache, out, result] = [0, 1, 2, 3, 4].map(|i| PathBuf::from(&args[i]));
     let o = parse_opts(&args[5..]);
+    // As the CLI does first.
+    daystep::allocator::keep_freed_memory();
     let t0 = Instant::now();
     let scene = Scene::load(&scene).unwrap();
     let w = read_weather(&weather).unwrap();
