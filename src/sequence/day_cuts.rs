@@ -285,6 +285,10 @@ struct Reader<'a> {
     ground_l: &'a [f32],
     /// The uniform grounds' node lists, without radiance.
     grounds: Vec<Vec<Source>>,
+    /// Each node met so far, without radiance: a day's cuts share most of their nodes,
+    /// and working out a node's geometry (vertices, solid angle) was a twentieth of a
+    /// warm year.
+    seen: HashMap<u64, Source, ahash::RandomState>,
 }
 
 impl Reader<'_> {
@@ -307,7 +311,11 @@ impl Reader<'_> {
             if w.iter().any(|x| !x.is_finite()) {
                 return None;
             }
-            out.push(lit(node(id)?, w[0], [w[1], w[2], w[3], w[4]]));
+            let s = match self.seen.get(&id) {
+                Some(s) => *s,
+                None => *self.seen.entry(id).or_insert(node(id)?),
+            };
+            out.push(lit(s, w[0], [w[1], w[2], w[3], w[4]]));
         }
         if let Some(g) = g {
             let (&l, rest) = self.ground_l.split_first()?;
@@ -379,6 +387,7 @@ pub(super) fn decode(r: &MappedRecord, lit: &[bool]) -> Option<Vec<Option<SkySou
         snaps: r.section(TAG_SNAPS).ok()?,
         ground_l: r.section(TAG_GROUND_L).ok()?,
         grounds,
+        seen: HashMap::default(),
     };
     let mut out = Vec::with_capacity(lit.len());
     for (&[flags, n_fine, n_coarse, negligible, fine_ground, coarse_ground], &is_lit) in
