@@ -34,7 +34,7 @@
 //! site) · L2 sky, sources · L3 hierarchy · L4 projection · L5 transfer, cache, trace ·
 //! L6 sensors, radiosity · L7 metrics, export, render (export may use metrics) · L8 sequence · L9 cli.
 #![warn(missing_docs)]
-#![deny(unsafe_code)] // exceptions: cache::store::map_readonly, the AVX2 dispatch of sequence::coefficient_sums and radiosity::response, math::bvh's uninitialised traversal stack, and allocator's mallopt
+#![deny(unsafe_code)] // exceptions: cache::store::map_readonly, the AVX2 dispatch of sequence::coefficient_sums and radiosity::response, and math::bvh's uninitialised traversal stack
 
 // Modules in pipeline order (rustfmt.toml keeps this order).
 
@@ -44,7 +44,7 @@ pub mod files; // atomic writes, text reads with paths
 pub mod math; // frames, spherical triangles, rasteriser, BVH, counter-based RNG
 pub mod photometry; // RGB ↔ lux at 179 lm/W
 pub mod memory; // the memory cap (--max-memory), resident memory from /proc
-pub mod allocator; // glibc's trim and mapping thresholds, set once per process
+pub mod allocator; // glibc's trim and mapping thresholds, raised once per process
 
 // L1 inputs
 pub mod scene; // scene.toml, OBJ/MTL, .pts, a builder for scenes in code
