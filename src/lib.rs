@@ -30,9 +30,10 @@
 //! W/m²; illuminance lux = 179 × (0.265 R + 0.670 G + 0.065 B).
 //!
 //! Layers (a module uses only lower layers; `tests/layers.rs` checks it):
-//! L0 error, files, math, photometry, memory, allocator · L1 site, scene, weather (scene and weather may use
-//! site) · L2 sky, sources · L3 hierarchy · L4 projection · L5 transfer, cache, trace ·
-//! L6 sensors, radiosity · L7 metrics, export, render (export may use metrics) · L8 sequence · L9 cli.
+//! L0 error, files, math, photometry, memory, allocator · L1 site, scene, weather (scene
+//! and weather may use site) · L2 sky, sources · L3 hierarchy · L4 projection · L5
+//! transfer, cache, trace · L6 sensors, radiosity · L7 metrics, export, render (export may
+//! use metrics) · L8 sequence · L9 cli.
 #![warn(missing_docs)]
 #![deny(unsafe_code)] // exceptions: cache::store::map_readonly, the AVX2 dispatch of sequence::coefficient_sums and radiosity::response, and math::bvh's uninitialised traversal stack
 
