@@ -24,6 +24,7 @@ use crate::photometry::Rgb;
 use crate::scene::Scene;
 use crate::sources::{node_source, SkyNodeKey, Source, SourceKey, SunKey};
 use glam::DVec3;
+use std::collections::hash_map::Entry;
 use std::collections::HashMap;
 
 /// Per step: flags ([`LIT`], [`FINE_SUN`], [`COARSE_SUN`], [`SNAP`], [`COARSE`]), the
@@ -311,9 +312,9 @@ impl Reader<'_> {
             if w.iter().any(|x| !x.is_finite()) {
                 return None;
             }
-            let s = match self.seen.get(&id) {
-                Some(s) => *s,
-                None => *self.seen.entry(id).or_insert(node(id)?),
+            let s = match self.seen.entry(id) {
+                Entry::Occupied(e) => *e.get(),
+                Entry::Vacant(e) => *e.insert(node(id)?),
             };
             out.push(lit(s, w[0], [w[1], w[2], w[3], w[4]]));
         }
