@@ -1,5 +1,6 @@
 //! Building the [`Bvh`](super::Bvh): binned surface-area heuristic over triangle
-//! centroids, median split past a depth bound, triangles copied into leaf order.
+//! centroids, median split past a depth bound, triangles copied into leaf order; the
+//! binary tree is then collapsed into the 4-wide one the queries walk.
 
 use super::*;
 
@@ -14,6 +15,81 @@ const TRAVERSAL_COST: f64 = 1.0;
 /// Beyond this depth nodes are median-split, which bounds the depth by 40 + log2(n) and so
 /// the traversal stack below.
 const SAH_MAX_DEPTH: usize = 40;
+
+/// A node of the binary tree the build makes: a leaf (`count > 0` triangles from
+/// `start`) or an inner node (`count == 0`, children at `start` and `start + 1`); its box
+/// in f32, rounded outwards.
+#[derive(Clone, Copy, Debug, Default)]
+struct BinNode {
+    lo: [f32; 3],
+    hi: [f32; 3],
+    start: u32,
+    count: u32,
+}
+
+impl BinNode {
+    /// Sets the box to the f32 box that contains `lo..hi`.
+    fn set_box(&mut self, lo: DVec3, hi: DVec3) {
+        self.lo = lo.to_array().map(|x| f32_toward(x, false));
+        self.hi = hi.to_array().map(|x| f32_toward(x, true));
+    }
+
+    /// Half the surface area of its box.
+    fn half_area(&self) -> f64 {
+        let lo = DVec3::from_array(self.lo.map(f64::from));
+        let hi = DVec3::from_array(self.hi.map(f64::from));
+        half_area(lo, hi)
+    }
+}
+
+/// Collapses the binary tree `bin` (root 0) into a 4-wide one: each 4-wide node takes a
+/// binary node's children and opens the largest (by surface area) inner ones among them
+/// until it holds four. The boxes are the binary nodes' own, so every box still holds its
+/// triangles.
+fn collapse(bin: &[BinNode]) -> Vec<Node> {
+    let mut out = vec![Node::default()];
+    // (4-wide node, the binary nodes it holds)
+    let mut work: Vec<(usize, Vec<usize>)> = vec![(
+        0,
+        if bin[0].count > 0 {
+            vec![0]
+        } else {
+            vec![bin[0].start as usize, bin[0].start as usize + 1]
+        },
+    )];
+    while let Some((k, mut slots)) = work.pop() {
+        while slots.len() < 4 {
+            let widest = slots
+                .iter()
+                .enumerate()
+                .filter(|(_, b)| bin[**b].count == 0)
+                .max_by(|a, b| bin[*a.1].half_area().total_cmp(&bin[*b.1].half_area()))
+                .map(|(i, _)| i);
+            let Some(i) = widest else { break };
+            let b = slots[i];
+            slots[i] = bin[b].start as usize;
+            slots.push(bin[b].start as usize + 1);
+        }
+        for (j, &b) in slots.iter().enumerate() {
+            let n = bin[b];
+            for a in 0..3 {
+                out[k].corners[0][a][j] = n.lo[a];
+                out[k].corners[1][a][j] = n.hi[a];
+            }
+            if n.count > 0 {
+                out[k].child[j] = n.start;
+                out[k].count[j] = n.count;
+            } else {
+                let c = out.len();
+                out.push(Node::default());
+                out[k].child[j] = c as u32;
+                out[k].count[j] = 0;
+                work.push((c, vec![n.start as usize, n.start as usize + 1]));
+            }
+        }
+    }
+    out
+}
 
 /// Half the surface area of a box (the heuristic only needs ratios).
 fn half_area(lo: DVec3, hi: DVec3) -> f64 {
@@ -52,7 +128,7 @@ impl Bvh {
         // Rounding in the slab test is a few ulps of the coordinates (≈1e-13 m at 1e3 m);
         // 1e-9 relative padding covers it with a wide margin and costs nothing measurable.
         let pad = DVec3::splat(1e-9 * scale);
-        let mut nodes = vec![Node::default()];
+        let mut nodes = vec![BinNode::default()];
         let mut work = vec![(0usize, 0usize, refs.len(), 0usize)];
         while let Some((ni, s, e, depth)) = work.pop() {
             let items = &mut refs[s..e];
@@ -81,8 +157,8 @@ impl Bvh {
                 }
                 Some(mid) => {
                     let left = nodes.len();
-                    nodes.push(Node::default());
-                    nodes.push(Node::default());
+                    nodes.push(BinNode::default());
+                    nodes.push(BinNode::default());
                     nodes[ni].start = left as u32;
                     nodes[ni].count = 0;
                     work.push((left + 1, s + mid, e, depth + 1));
@@ -93,7 +169,7 @@ impl Bvh {
         bvh.tris = refs.iter().map(|&i| triangles[i as usize]).collect();
         bvh.normals = bvh.tris.iter().map(face_normal).collect();
         bvh.ids = refs;
-        bvh.nodes = nodes;
+        bvh.nodes = collapse(&nodes);
         bvh
     }
 }

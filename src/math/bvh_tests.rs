@@ -417,25 +417,27 @@ fn every_node_box_holds_its_triangles_far_from_the_origin() {
         })
         .collect();
     let bvh = Bvh::build(&tris);
-    // Walk down from the root: every node's box contains its subtree's vertices.
+    // Walk down from the root: every child's box contains its subtree's vertices.
     fn check(bvh: &Bvh, ni: usize) -> (DVec3, DVec3) {
         let n = &bvh.nodes[ni];
-        let (lo, hi) = if n.count > 0 {
-            let s = n.start as usize;
-            let vs = bvh.tris[s..s + n.count as usize].iter().flatten();
-            vs.fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(a, b), v| {
-                (a.min(*v), b.max(*v))
-            })
-        } else {
-            let (a, b) = check(bvh, n.start as usize);
-            let (c, d) = check(bvh, n.start as usize + 1);
-            (a.min(c), b.max(d))
-        };
-        assert!(
-            n.lo().cmple(lo).all() && n.hi().cmpge(hi).all(),
-            "node {ni}"
-        );
-        (lo, hi)
+        let mut all = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        for j in (0..4).filter(|&j| n.count[j] != EMPTY) {
+            let (lo, hi) = if n.count[j] > 0 {
+                let s = n.child[j] as usize;
+                let vs = bvh.tris[s..s + n.count[j] as usize].iter().flatten();
+                vs.fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(a, b), v| {
+                    (a.min(*v), b.max(*v))
+                })
+            } else {
+                check(bvh, n.child[j] as usize)
+            };
+            assert!(
+                n.lo(j).cmple(lo).all() && n.hi(j).cmpge(hi).all(),
+                "node {ni} child {j}"
+            );
+            all = (all.0.min(lo), all.1.max(hi));
+        }
+        all
     }
     check(&bvh, 0);
     // And rays aimed at vertices still find them.
@@ -444,5 +446,46 @@ fn every_node_box_holds_its_triangles_far_from_the_origin() {
         let o = target + DVec3::new(0.3, -0.2, 7.0);
         let d = (target - o).normalize();
         assert!(bvh.any_hit(o, d, 0.0, 20.0), "triangle {i}");
+    }
+}
+
+#[test]
+fn the_four_wide_tree_holds_every_triangle_once() {
+    // Sizes around the collapse's edge cases: a leaf root, a root with two or three
+    // children, and deep trees.
+    for n in [1usize, 2, 3, 5, 9, 17, 40, 333, 2000] {
+        let r = |stream: u64, i: u64| uniform(0x4a1, stream, i);
+        let tris: Vec<[DVec3; 3]> = (0..n as u64)
+            .map(|i| {
+                let c = DVec3::new(r(0, i), r(1, i), r(2, i)) * 20.0;
+                [0, 1, 2].map(|k| c + DVec3::new(r(3 + k, i), r(6 + k, i), r(9 + k, i)))
+            })
+            .collect();
+        let bvh = Bvh::build(&tris);
+        let mut seen = vec![0u32; bvh.tris.len()];
+        let mut inner = vec![0u32; bvh.nodes.len()];
+        let mut stack = vec![0usize];
+        inner[0] = 1;
+        while let Some(ni) = stack.pop() {
+            let node = &bvh.nodes[ni];
+            let used = (0..4).filter(|&j| node.count[j] != EMPTY).count();
+            // Slots are filled from the first; a node holds four unless its subtree has
+            // fewer leaves.
+            assert!((0..used).all(|j| node.count[j] != EMPTY), "n {n} node {ni}");
+            for j in 0..used {
+                let (c, k) = (node.child[j] as usize, node.count[j] as usize);
+                if k > 0 {
+                    seen[c..c + k].iter_mut().for_each(|s| *s += 1);
+                } else {
+                    inner[c] += 1;
+                    stack.push(c);
+                }
+            }
+        }
+        assert!(seen.iter().all(|&s| s == 1), "n {n}: {seen:?}");
+        assert!(
+            inner.iter().all(|&s| s == 1),
+            "n {n}: a node reached twice or never"
+        );
     }
 }
