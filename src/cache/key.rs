@@ -136,7 +136,11 @@ pub const KIND_CUTS: u8 = 7;
 /// resolution 0; `scene` hashes the day's records, the site, the ground reflectance and
 /// the sky parameters of both cuts, never the geometry).
 pub const KIND_DAY_CUTS: u8 = 8;
-// Kinds 9..=255 are free for later record types (global-line bundles, depth maps, …).
+/// Record kind: the sensors' responses to one day's snapped suns at one level, in step
+/// order (direction 0; `scene` hashes the directions' own scene hash and the suns' ids,
+/// [`sun_direction_id`]; `resolution` the suns' LDI resolution).
+pub const KIND_DAY_SUNS: u8 = 9;
+// Kinds 10..=255 are free for later record types (global-line bundles, depth maps, …).
 
 /// Lossless 64-bit id of a sun-grid cell: spacing δ (µdeg) in the top 32 bits, the altitude
 /// band as a signed 16-bit value in the next 16, the azimuth index in the low 16.

@@ -36,8 +36,9 @@ mod eviction;
 pub mod maintenance;
 
 pub use key::{
-    scene_hash, RecordKey, SceneHash, KIND_COEFFICIENTS, KIND_CUTS, KIND_DAY_CUTS, KIND_GROUND,
-    KIND_SKY_NODE, KIND_SUN, KIND_SUN_GRID, KIND_TRANSPORT, KIND_VIEW,
+    scene_hash, sun_direction_id, RecordKey, SceneHash, KIND_COEFFICIENTS, KIND_CUTS,
+    KIND_DAY_CUTS, KIND_DAY_SUNS, KIND_GROUND, KIND_SKY_NODE, KIND_SUN, KIND_SUN_GRID,
+    KIND_TRANSPORT, KIND_VIEW,
 };
 pub use record::{
     decode_direction, encode, encode_direction, Invalid, MappedRecord, Record, Section,

@@ -16,7 +16,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
 use std::sync::Mutex;
-use std::time::SystemTime;
+use std::time::{Duration, SystemTime};
 
 pub use super::maintenance::{clear, dir_stats, verify, DirStats, VerifyReport};
 
@@ -28,6 +28,10 @@ pub const DEFAULT_MAX_BYTES: u64 = 2 << 30;
 /// coefficients, a few kilobytes) the unmapping's TLB shoot-down across threads cost more
 /// than the copy: about a tenth of a warm `annual --leed` run's time with four groups.
 pub const READ_MAX_BYTES: u64 = 1 << 20;
+
+/// A hit refreshes its record's modification time (the eviction's last use) only when
+/// it is older than this.
+const TOUCH_AFTER: Duration = Duration::from_secs(15 * 60);
 
 /// Counters of one [`Store`] since it was opened. Every [`Store::get`] counts as exactly
 /// one of `hits`, `misses` (no file, or no usable folder) or `rebuilds` (an invalid file
@@ -249,8 +253,8 @@ impl Store {
                 return None;
             }
         };
-        let len = match file.metadata() {
-            Ok(m) => m.len(),
+        let (len, modified) = match file.metadata() {
+            Ok(m) => (m.len(), m.modified().ok()),
             Err(e) => return self.invalid(&path, Invalid::Unreadable(e.to_string())),
         };
         // Too short to hold a header: rejected without mapping (empty files cannot be mapped
@@ -283,9 +287,15 @@ impl Store {
             Ok(r) => {
                 self.hits.fetch_add(1, Relaxed);
                 self.bytes_mapped.fetch_add(len, Relaxed);
-                // Least-recently-used bookkeeping; a file we may not touch (another user's)
-                // is simply evicted earlier.
-                let _ = file.set_modified(SystemTime::now());
+                // Least-recently-used bookkeeping, to within TOUCH_AFTER: a warm run read
+                // the same records its cold run had just written, and touching each again
+                // was a syscall and an inode write a record. A file we may not touch
+                // (another user's) is simply evicted earlier.
+                let now = SystemTime::now();
+                if modified.is_none_or(|t| now.duration_since(t).map_or(true, |a| a > TOUCH_AFTER))
+                {
+                    let _ = file.set_modified(now);
+                }
                 Some(r)
             }
             Err(reason) => self.invalid(&path, reason),

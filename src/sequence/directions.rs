@@ -31,7 +31,8 @@ const PER_SENSOR: usize = 16;
 /// [`MAX_SUN_PANES`]; up to 4 pane triangle indices). A year meets thousands of sun cells, so they are kept
 /// small.
 const TAG_SUN_SENSORS: u32 = FIRST_USER_TAG + 2;
-const PER_SUN_SENSOR: usize = 9;
+/// Values a sun's response keeps per sensor ([`TAG_SUN_SENSORS`]).
+pub(super) const PER_SUN_SENSOR: usize = 9;
 /// Panes a sun ray's record lists (more: τ at the true angle is found by a new ray).
 const MAX_SUN_PANES: usize = 4;
 
@@ -281,6 +282,61 @@ impl<'a> Directions<'a> {
         }
     }
 
+    /// The sensors' responses to each of `suns` (a day's snapped suns, in step order) at
+    /// `resolution`, read from one cache record for them all, or computed and stored as
+    /// one ([`super::day_suns`], sparse): a warm year then opens a record a day for its
+    /// suns, where it opened one a sun (two thirds of the office's 12 000). They are not
+    /// stored sun by sun: a year meets most snapped suns once, and a sun's responses are
+    /// one ray per sensor, so the few a cold year meets again are cast again rather than
+    /// kept twice on disk. With fewer than two suns, or no cache, as
+    /// [`Self::sensor_responses`] one by one.
+    pub fn day_sun_responses(&self, suns: &[&Source], resolution: u32) -> Vec<Vec<NodeResponse>> {
+        let k = self.scene.sensors.len();
+        let key = (suns.len() > 1 && k > 0 && self.store.is_enabled())
+            .then(|| self.day_suns_key(suns, resolution))
+            .flatten();
+        let Some(key) = key else {
+            return suns
+                .iter()
+                .map(|s| self.sensor_responses(s, resolution))
+                .collect();
+        };
+        let cached = self
+            .store
+            .get(&key)
+            .and_then(|r| super::day_suns::decode(&r, suns.len(), k));
+        if let Some(c) = cached {
+            self.from_cache
+                .fetch_add(suns.len() as u64, Ordering::Relaxed);
+            return c;
+        }
+        let made: Vec<Vec<NodeResponse>> = suns.par_iter().map(|s| self.responses(s).0).collect();
+        self.built.fetch_add(suns.len() as u64, Ordering::Relaxed);
+        self.store.put(&key, &super::day_suns::encode(&key, &made));
+        made
+    }
+
+    /// The key of [`Self::day_sun_responses`]' record; `None` when a source is not a
+    /// snapped sun with a lossless id.
+    fn day_suns_key(&self, suns: &[&Source], resolution: u32) -> Option<RecordKey> {
+        let mut h = blake3::Hasher::new();
+        h.update(b"daystep day suns v1\0");
+        h.update(&self.hash.0);
+        h.update(&(suns.len() as u64).to_le_bytes());
+        for s in suns {
+            let SourceKey::Sun(sun) = s.key else {
+                return None;
+            };
+            h.update(&cache::sun_direction_id(&sun)?.to_le_bytes());
+        }
+        Some(RecordKey {
+            scene: SceneHash(*h.finalize().as_bytes()),
+            kind: cache::KIND_DAY_SUNS,
+            direction: 0,
+            resolution,
+        })
+    }
+
     /// The hash of what these directions depend on (geometry, glazing, sensors,
     /// parameters): the `scene` of their record keys.
     pub fn hash(&self) -> SceneHash {
@@ -374,14 +430,10 @@ fn unflatten(flat: &[f64], n: usize, sun: bool) -> Option<Vec<NodeResponse>> {
     Some(
         flat.chunks_exact(per)
             .map(|c| {
-                let mut r = NodeResponse::default();
                 if sun {
-                    r.child[0] = Rgb::new(c[0], c[1], c[2]);
-                    r.child[1] = Rgb::new(c[3], c[4], 0.0);
-                    r.child[2] = Rgb::new(c[5], c[6], c[7]);
-                    r.child[3].x = c[8];
-                    return r;
+                    return unflatten_sun(c);
                 }
+                let mut r = NodeResponse::default();
                 for k in 0..4 {
                     r.child[k] = Rgb::new(c[3 * k], c[3 * k + 1], c[3 * k + 2]);
                     r.uncertainty[k] = c[12 + k];
@@ -392,15 +444,37 @@ fn unflatten(flat: &[f64], n: usize, sun: bool) -> Option<Vec<NodeResponse>> {
     )
 }
 
+/// A sun's response at one sensor as its [`PER_SUN_SENSOR`] cached values.
+pub(super) fn flatten_sun(n: &NodeResponse) -> [f64; PER_SUN_SENSOR] {
+    [
+        n.child[0].x,
+        n.child[0].y,
+        n.child[0].z,
+        n.child[1].x,
+        n.child[1].y,
+        n.child[2].x,
+        n.child[2].y,
+        n.child[2].z,
+        n.child[3].x,
+    ]
+}
+
+/// Inverse of [`flatten_sun`] (`c` holds [`PER_SUN_SENSOR`] values).
+pub(super) fn unflatten_sun(c: &[f64]) -> NodeResponse {
+    let mut r = NodeResponse::default();
+    r.child[0] = Rgb::new(c[0], c[1], c[2]);
+    r.child[1] = Rgb::new(c[3], c[4], 0.0);
+    r.child[2] = Rgb::new(c[5], c[6], c[7]);
+    r.child[3].x = c[8];
+    r
+}
+
 fn flatten(sensors: &[NodeResponse], sun: bool) -> Vec<f64> {
     let per = if sun { PER_SUN_SENSOR } else { PER_SENSOR };
     let mut flat = Vec::with_capacity(per * sensors.len());
     for n in sensors {
         if sun {
-            flat.extend_from_slice(&n.child[0].to_array());
-            flat.extend_from_slice(&[n.child[1].x, n.child[1].y]);
-            flat.extend_from_slice(&n.child[2].to_array());
-            flat.push(n.child[3].x);
+            flat.extend_from_slice(&flatten_sun(n));
             continue;
         }
         for c in &n.child {
@@ -455,5 +529,92 @@ mod tests {
         coarse.get(&src, res);
         coarse.get(&src, res);
         assert_eq!(count(&coarse), (1, 1));
+    }
+
+    /// A day's suns are read back as one record with the responses each sun gets alone,
+    /// and a damaged record is cast again, never trusted.
+    #[test]
+    fn a_days_suns_are_one_record_equal_to_each_sun_alone() {
+        use crate::sources::SunKey;
+        let mut b = SceneBuilder::new();
+        let m = b.add_opaque("floor", 0.5);
+        b.add_rect(
+            "floor",
+            m,
+            Face::from_axis(2, true),
+            0.0,
+            Rect::new([0.0, 4.0], [0.0, 4.0]),
+        );
+        // A wall that shades some sensors from some of the suns.
+        b.add_rect(
+            "wall",
+            m,
+            Face::from_axis(0, false),
+            2.0,
+            Rect::new([0.0, 4.0], [0.0, 3.0]),
+        );
+        for x in [0.5, 1.5, 2.5, 3.5] {
+            b.add_sensor(DVec3::new(x, 2.0, 0.8), DVec3::Z);
+        }
+        let scene = b.build("floor and wall").unwrap();
+        let q = Quality::preset("draft").unwrap();
+        let folder = tempfile::tempdir().unwrap();
+        let store = Store::open(folder.path(), cache::DEFAULT_MAX_BYTES);
+        let tracer = Arc::new(Tracer::new(&scene));
+        let sun = |alt: f64, az: f64| {
+            let key = SunKey::snap(alt, az, 1.0);
+            Source {
+                key: SourceKey::Sun(key),
+                direction: key.direction(),
+                normal_irradiance: Rgb::splat(800.0),
+                radiance: Rgb::ZERO,
+                child_radiance: [Rgb::ZERO; 4],
+                solid_angle: 0.0,
+                vertices: None,
+                true_direction: key.direction(),
+            }
+        };
+        let suns = [sun(20.0, 80.0), sun(50.0, 180.0), sun(15.0, 280.0)];
+        let refs: Vec<&Source> = suns.iter().collect();
+        let res = q.projection.resolution_for(true);
+        let dirs = Directions::sensors_only(&scene, &q, &store, tracer);
+        let alone: Vec<Vec<NodeResponse>> = suns.iter().map(|s| dirs.responses(s).0).collect();
+        let lit =
+            |r: &[Vec<NodeResponse>]| r.iter().flatten().filter(|n| n.child[0].x > 0.0).count();
+        let shaded = alone
+            .iter()
+            .flatten()
+            .filter(|n| n.child[0].x == 0.0)
+            .count();
+        assert!(
+            lit(&alone) > 0 && shaded > 0,
+            "the wall shades some sensors"
+        );
+        let counts = |d: &Directions| (d.counts().built, d.counts().from_cache);
+        let made = dirs.day_sun_responses(&refs, res);
+        assert_eq!(made, alone);
+        assert_eq!(counts(&dirs), (3, 0));
+        let read = dirs.day_sun_responses(&refs, res);
+        assert_eq!(read, alone);
+        assert_eq!(counts(&dirs), (3, 3), "read as one record");
+        assert_eq!(store.stats().hits, 1);
+        // The suns in another order are another record.
+        let swapped = [refs[1], refs[0], refs[2]];
+        let other = dirs.day_sun_responses(&swapped, res);
+        assert_eq!(other[0], alone[1]);
+        assert_eq!(counts(&dirs), (6, 3));
+        // A truncated record is rebuilt.
+        for e in std::fs::read_dir(folder.path()).unwrap() {
+            let p = e.unwrap().path();
+            let len = std::fs::metadata(&p).unwrap().len();
+            std::fs::OpenOptions::new()
+                .write(true)
+                .open(&p)
+                .unwrap()
+                .set_len(len - 8)
+                .unwrap();
+        }
+        assert_eq!(dirs.day_sun_responses(&refs, res), alone);
+        assert_eq!(counts(&dirs), (9, 3), "cast again");
     }
 }

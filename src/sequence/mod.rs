@@ -17,6 +17,7 @@ pub mod operator;
 pub mod direct;
 pub mod cuts;
 mod day_cuts;
+mod day_suns;
 pub mod coefficients;
 pub mod estimate;
 pub mod step;

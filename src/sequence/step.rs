@@ -392,11 +392,8 @@ impl<'a> Engine<'a> {
         if !self.opts.values_only {
             return None;
         }
-        let sun: Vec<Vec<f64>> = batch
-            .suns
-            .iter()
-            .map(|s| self.sun_lux(sun_dirs, s.as_slice()))
-            .collect();
+        let cuts: Vec<&[_]> = batch.suns.iter().map(|s| s.as_slice()).collect();
+        let sun = self.sun_lux_many(sun_dirs, &cuts);
         Some(c.evaluate_values_batch(batch, &sun))
     }
 

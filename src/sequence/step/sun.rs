@@ -3,20 +3,34 @@
 
 use super::super::directions::Directions;
 use super::Engine;
+use crate::sensors::NodeResponse;
 use crate::sources::{Source, SourceKey};
 
 impl Engine<'_> {
-    /// Each sensor's direct sun (lux) from the sun among `sources` (none: zeros), through
-    /// `dirs`' cached sensor responses of its snapped cell, τ at the true angle.
-    pub(super) fn sun_lux(&self, dirs: &Directions, sources: &[Source]) -> Vec<f64> {
-        let k = self.scene.sensors.len();
-        let Some(src) = sources.iter().find(|s| matches!(s.key, SourceKey::Sun(_))) else {
-            return vec![0.0; k];
-        };
+    /// Each sensor's direct sun (lux) in each of several steps' `cuts` (a day's) from the
+    /// sun among its sources (none: zeros), through `dirs`' sensor responses of its
+    /// snapped cell, read for all the steps as one record
+    /// ([`Directions::day_sun_responses`]), τ at the true angle.
+    pub(super) fn sun_lux_many(&self, dirs: &Directions, cuts: &[&[Source]]) -> Vec<Vec<f64>> {
+        let suns: Vec<Option<&Source>> = cuts
+            .iter()
+            .map(|c| c.iter().find(|s| matches!(s.key, SourceKey::Sun(_))))
+            .collect();
+        let present: Vec<&Source> = suns.iter().flatten().copied().collect();
         let res = dirs.quality().projection.resolution_for(true);
-        // The sensors' section only: the projection is not read.
-        let d = dirs.sensor_responses(src, res);
-        (0..k)
+        // The sensors' sections only: the projections are not read.
+        let mut responses = dirs.day_sun_responses(&present, res).into_iter();
+        suns.iter()
+            .map(|s| match s {
+                Some(src) => self.lux(dirs, src, &responses.next().expect("a sun's responses")),
+                None => vec![0.0; self.scene.sensors.len()],
+            })
+            .collect()
+    }
+
+    /// Each sensor's direct sun (lux) from `src`, given its responses `d`.
+    fn lux(&self, dirs: &Directions, src: &Source, d: &[NodeResponse]) -> Vec<f64> {
+        (0..self.scene.sensors.len())
             .map(|i| {
                 let cos = self.scene.sensors[i].normal.dot(src.true_direction);
                 if cos > 0.0 {
