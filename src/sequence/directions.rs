@@ -492,10 +492,8 @@ mod tests {
     use crate::sources::{node_source, SkyNodeKey};
     use glam::DVec3;
 
-    /// A projected direction is computed at its first two uses and kept from the second;
-    /// a sensors-only one (no leaves to hold) is kept from the first.
-    #[test]
-    fn a_projected_direction_is_kept_from_its_second_use() {
+    /// A scene of one square floor `side` metres wide at z = 0, and its material.
+    fn floor(side: f64) -> (SceneBuilder, u32) {
         let mut b = SceneBuilder::new();
         let m = b.add_opaque("floor", 0.5);
         b.add_rect(
@@ -503,8 +501,16 @@ mod tests {
             m,
             Face::from_axis(2, true),
             0.0,
-            Rect::new([0.0, 2.0], [0.0, 2.0]),
+            Rect::new([0.0, side], [0.0, side]),
         );
+        (b, m)
+    }
+
+    /// A projected direction is computed at its first two uses and kept from the second;
+    /// a sensors-only one (no leaves to hold) is kept from the first.
+    #[test]
+    fn a_projected_direction_is_kept_from_its_second_use() {
+        let (mut b, _) = floor(2.0);
         b.add_sensor(DVec3::new(1.0, 1.0, 0.5), DVec3::Z);
         let scene = b.build("one floor").unwrap();
         let q = Quality::preset("draft").unwrap();
@@ -536,15 +542,7 @@ mod tests {
     #[test]
     fn a_days_suns_are_one_record_equal_to_each_sun_alone() {
         use crate::sources::SunKey;
-        let mut b = SceneBuilder::new();
-        let m = b.add_opaque("floor", 0.5);
-        b.add_rect(
-            "floor",
-            m,
-            Face::from_axis(2, true),
-            0.0,
-            Rect::new([0.0, 4.0], [0.0, 4.0]),
-        );
+        let (mut b, m) = floor(4.0);
         // A wall that shades some sensors from some of the suns.
         b.add_rect(
             "wall",
