@@ -19,6 +19,7 @@
 pub(super) use super::annual_steps::{classify, is_night, perez, step_time, Kind};
 use super::annual_steps::{Ctx, Planned, StepOut};
 use super::config::{Quality, SkySpec};
+use super::day_feed;
 use super::merge::parse_times;
 use super::path_pass::{PathValues, Paths};
 use super::step::{Engine, EngineOptions, StepTime};
@@ -35,19 +36,17 @@ use crate::weather::Weather;
 use chrono::{NaiveDate, NaiveDateTime};
 use rayon::prelude::*;
 use std::path::Path;
-use std::sync::atomic::Ordering;
 use std::sync::Mutex;
 use std::time::Instant;
 
-/// Days computed in parallel between checkpoints, for `sensors` sensors and a run of
-/// `days` days: as many as keep a batch's results (about 24 steps × 20 bytes a sensor a
-/// day) near 32 MB and an interrupted run's loss under an eighth of it, from 8 to 32.
-/// Each batch ends waiting for its slowest day; 32 days instead of 8 took an eighth off
-/// a warm office year on two cores.
+/// Days between checkpoints, for `sensors` sensors and a run of `days` days: as many as
+/// keep a batch's results (about 24 steps × 20 bytes a sensor a day) near 32 MB and an
+/// interrupted run's loss under an eighth of it, from 1 to 32. The workers do not wait
+/// at a batch's end ([`day_feed`]), so short runs can checkpoint every day or so.
 fn days_per_batch(sensors: usize, days: usize) -> usize {
     (32_000_000 / (24 * 20 * sensors.max(1)))
         .min(days / 8)
-        .clamp(8, 32)
+        .clamp(1, 32)
 }
 
 /// A batch of days computed and not yet written.
@@ -328,41 +327,12 @@ pub fn run_annual(
     progress(done, total_steps);
     let mut errs: Vec<f32> = Vec::new();
     let todo = &days[resumed_days..];
-    // A batch's rows are written while the next batch is computed: written after it, they
-    // kept the workers idle for a tenth of a warm year.
-    let mut pending: Option<Computed> = None;
     // The metrics taken from the rows as they are written, so that a run that resumed
     // nothing does not read its tables again (a run that resumed reads them whole).
     let mut tables = (report.resumed == 0 && n == 1)
         .then(|| MetricTables::new(sensors, weather.interval_minutes, &opts.metrics));
-    for batch in todo.chunks(days_per_batch(scene.sensors.len(), days.len())) {
-        if report.interrupted || stop.load(Ordering::SeqCst) {
-            report.interrupted = true;
-            break;
-        }
-        let (wrote, results) = rayon::join(
-            || {
-                pending.take().map_or(Ok(()), |c| {
-                    c.write(
-                        &mut w_total,
-                        &mut w_sun,
-                        &mut w_surf,
-                        paths.as_ref(),
-                        &mut tables,
-                    )
-                })
-            },
-            || {
-                engine.peaks().measure("steps", || {
-                    batch
-                        .par_iter()
-                        .map(|day| ctx.run_day(day))
-                        .collect::<Vec<Result<Vec<StepOut>>>>()
-                })
-            },
-        );
-        wrote?;
-        let results: Vec<Vec<StepOut>> = results.into_iter().collect::<Result<_>>()?;
+    // Each batch's rows are written while later days are computed.
+    let mut hand_on = |batch: &[Vec<Planned>], results: Vec<Vec<StepOut>>| -> Result<()> {
         // Batched light paths: every lit step's cut of the batch at once.
         let path_rows = match &paths {
             Some(p) if p.batched() => {
@@ -383,22 +353,27 @@ pub fn run_annual(
             report.computed += day.len();
             done += day.len();
         }
-        // Counted once computed: a stop asked for now still writes this batch.
-        progress(done, total_steps);
-        pending = Some(Computed {
+        Computed {
             batch,
             results,
             path_rows,
-        });
-    }
-    if let Some(c) = pending.take() {
-        c.write(
+        }
+        .write(
             &mut w_total,
             &mut w_sun,
             &mut w_surf,
             paths.as_ref(),
             &mut tables,
         )?;
+        progress(done, total_steps);
+        Ok(())
+    };
+    if !report.interrupted {
+        let per_batch = days_per_batch(scene.sensors.len(), days.len());
+        let stopped = engine.peaks().measure("steps", || {
+            day_feed::run_batches(todo, per_batch, stop, |day| ctx.run_day(day), &mut hand_on)
+        })?;
+        report.interrupted = stopped;
     }
     // Step counts (the plan, so resumed runs report the same).
     for k in &kinds {

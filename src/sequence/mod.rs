@@ -28,6 +28,7 @@ pub mod convergence;
 pub mod annual;
 mod annual_options;
 mod annual_steps;
+mod day_feed;
 pub mod merge;
 pub mod light_paths;
 mod path_pass;
