@@ -57,6 +57,32 @@ fn add_node_avx2(acc: &mut [f32], k: usize, direct: &[f32], indirect: &[f32], w:
     add_node_any(acc, k, direct, indirect, w)
 }
 
+/// `err += (a·row)²`, lux² (`row` in lux per unit of `a`; empty: nothing): errors of
+/// interreflected rows taken from ancestors ([`super::indirect_ancestors`]), combined in
+/// quadrature.
+#[allow(unsafe_code)] // as in add_node
+pub(super) fn add_err(err: &mut [f64], a: f32, row: &[f32]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2, checked just above.
+        return unsafe { add_err_avx2(err, a, row) };
+    }
+    add_err_any(err, a, row)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn add_err_avx2(err: &mut [f64], a: f32, row: &[f32]) {
+    add_err_any(err, a, row)
+}
+
+#[inline(always)]
+fn add_err_any(err: &mut [f64], a: f32, row: &[f32]) {
+    for (e, r) in err.iter_mut().zip(row) {
+        *e += (a as f64 * *r as f64).powi(2);
+    }
+}
+
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn axpy_avx2(y: &mut [f32], a: f32, x: &[f32]) {
@@ -185,5 +211,16 @@ mod tests {
         let want: f32 = (0..4).map(|c| w.children[c] * direct[c * k + s]).sum();
         let before = v(s + 5000);
         assert!((a[s] - before - want).abs() <= 1e-5 * (before.abs() + want.abs() + 1.0));
+        // The errors in quadrature, alike.
+        let mut e: Vec<f64> = (0..k).map(|i| v(i + 9000) as f64).collect();
+        let mut f = e.clone();
+        add_err_any(&mut e, w.irradiance, &indirect[..k]);
+        add_err(&mut f, w.irradiance, &indirect[..k]);
+        assert_eq!(
+            e.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            f.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+        );
+        let want = v(9005) as f64 + (w.irradiance as f64 * indirect[5] as f64).powi(2);
+        assert!((e[5] - want).abs() <= 1e-12 * want);
     }
 }

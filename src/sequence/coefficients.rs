@@ -234,11 +234,7 @@ impl Coefficients {
                     axpy(refsum, l, &gs.direct);
                     axpy(unc, l, &gs.uncertainty);
                     axpy(ind, l, &gs.indirect);
-                    indirect_ancestors::add_err(
-                        &mut inherited[j * k..(j + 1) * k],
-                        l,
-                        &gs.direction_err,
-                    );
+                    sums::add_err(&mut inherited[j * k..(j + 1) * k], l, &gs.direction_err);
                 }
                 None => fine_uses.extend(ground.iter().map(|s| use_of(j, s))),
             }
@@ -272,11 +268,7 @@ impl Coefficients {
                     weights,
                 );
                 let e = weights.irradiance;
-                indirect_ancestors::add_err(
-                    &mut inherited[j * k..(j + 1) * k],
-                    e,
-                    &nd.direction_err,
-                );
+                sums::add_err(&mut inherited[j * k..(j + 1) * k], e, &nd.direction_err);
             }
         }
         sums::sort_uses(&mut coarse_uses);

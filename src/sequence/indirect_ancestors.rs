@@ -155,14 +155,6 @@ pub(super) fn deep_direct(
         .collect()
 }
 
-/// `err += (a·row)²`, lux² (`row` in lux per unit of `a`; empty: nothing): errors of
-/// interreflected rows taken from ancestors, combined in quadrature.
-pub(super) fn add_err(err: &mut [f64], a: f32, row: &[f32]) {
-    for (e, r) in err.iter_mut().zip(row) {
-        *e += (a as f64 * *r as f64).powi(2);
-    }
-}
-
 /// The union's nodes by key: a solved node's data (`solved`, in the order of `list`) as
 /// it is, a deep node's (`deep`, with its `direct` rows in the same order) from its own
 /// direct rows and its ancestors' interreflected ones ([`inherit`], shared, not copied).
