@@ -1,10 +1,10 @@
 //! Days computed in parallel and handed on in batches, in order, without the workers
 //! waiting at each batch's end. Each batch ended waiting for its slowest day: with one
 //! batch for the whole year instead of twelve, a warm office year took 0.94× the time
-//! (paired runs, 2026-12-07). The calling thread hands days to the pool in order, at most
-//! a batch and two days per worker ahead of the results it holds, so a stop takes effect
-//! within about a batch and the results held are at most about two batches, as when each
-//! batch was written while the next was computed.
+//! (paired runs, 2026-12-07). The calling thread hands days to the pool batch by batch,
+//! at most two per worker ahead of the results, and a writer thread writes each batch
+//! once all its days are in. So the results held are about a batch, and a stop ends at
+//! the batch begun.
 
 use crate::error::Result;
 use std::collections::BTreeMap;
@@ -18,7 +18,7 @@ use std::sync::mpsc;
 /// finished and handed on; returns whether it came before the last day.
 ///
 /// # Errors
-/// The first (in day order) of `day`'s errors, after the batches before it are handed
+/// The first (in day order) of `day`'s errors among the days computed, after the batches before it are handed
 /// on; days not yet taken are then not computed. Or `batch`'s error.
 pub(super) fn run_batches<D: Sync, R: Send>(
     days: &[D],
@@ -55,7 +55,7 @@ pub(super) fn run_batches<D: Sync, R: Send>(
     })
 }
 
-/// Hands `days` to the pool in order, at most two per worker ahead of the results, and
+/// Hands `days` to the pool batch by batch ([`interleaved`] within each), at most two per worker ahead of the results, and
 /// each whole batch with its results to `handed`, in order; stops taking at a stop's next
 /// batch boundary, after a failed day and once `write_failed`. Returns the days taken.
 fn take_days<D: Sync, R: Send>(
@@ -80,7 +80,7 @@ fn take_days<D: Sync, R: Send>(
                 if taken % per_batch == 0 && stop.load(Ordering::SeqCst) {
                     break;
                 }
-                let (i, tx) = (taken, tx.clone());
+                let (i, tx) = (interleaved(taken, per_batch, days.len()), tx.clone());
                 s.spawn_fifo(move |_| {
                     // The receiver is gone only once the run failed: nothing to do.
                     let _ = tx.send((i, day(&days[i])));
@@ -95,7 +95,7 @@ fn take_days<D: Sync, R: Send>(
             failed |= r.is_err();
             held.insert(i, r);
             // Every batch whose days are all here, in order.
-            while next < taken {
+            while next < days.len() {
                 let end = (next + per_batch).min(days.len());
                 if !(next..end).all(|j| held.contains_key(&j)) {
                     break;
@@ -119,6 +119,17 @@ fn take_days<D: Sync, R: Send>(
         held.into_values().find_map(Result::err).map_or(Ok(()), Err)
     })?;
     Ok(taken)
+}
+
+/// The day taken `t`-th: within each batch, the first half's days alternate with the
+/// second half's, so that the days running side by side are half a batch apart, as when
+/// a batch was a `par_iter` split in halves. Side by side, neighbouring days computed the
+/// same coarse nodes at once.
+fn interleaved(t: usize, per_batch: usize, n: usize) -> usize {
+    let start = t / per_batch * per_batch;
+    let (o, len) = (t - start, per_batch.min(n - start));
+    let half = len.div_ceil(2);
+    start + if o % 2 == 0 { o / 2 } else { half + o / 2 }
 }
 
 /// The next day's result. On a worker of a pool (a caller inside `ThreadPool::install`),
@@ -167,6 +178,24 @@ mod tests {
             Ok(())
         });
         (r, got)
+    }
+
+    #[test]
+    fn each_batch_takes_each_of_its_days_once() {
+        for (per_batch, n) in [(1, 5), (8, 8), (8, 21), (32, 365), (7, 3)] {
+            let order: Vec<usize> = (0..n).map(|t| interleaved(t, per_batch, n)).collect();
+            let mut sorted = order.clone();
+            sorted.sort_unstable();
+            assert_eq!(sorted, (0..n).collect::<Vec<_>>(), "{per_batch} {n}");
+            // Each batch's days are taken before the next batch's.
+            for (t, &i) in order.iter().enumerate() {
+                assert_eq!(i / per_batch, t / per_batch);
+            }
+        }
+        assert_eq!(
+            (0..8).map(|t| interleaved(t, 8, 8)).collect::<Vec<_>>(),
+            [0, 4, 1, 5, 2, 6, 3, 7]
+        );
     }
 
     #[test]
