@@ -345,9 +345,11 @@ shard_dir=$ROOT/runs/$study/shard-$victim
 partial=$shard_dir/illuminance.csv.partial
 partial_sun=$shard_dir/direct_sun.csv.partial
 until_state "${array}_$victim" RUNNING
-# A checkpoint is a whole batch of 8 days (24 hourly rows a day) behind the header, in both
-# tables.
-rows=$((8 * 24))
+# A checkpoint is a whole batch of days (24 hourly rows a day; a batch is an eighth of the
+# shard's days, at least one) behind the header, in both tables: the first one is waited
+# for. Days are written in order, and a day that waits inside a worker for work another
+# day took can hold later days back, so later checkpoints may come in bursts.
+rows=24
 rows_in() { # FILE → its rows after the header (0 when absent)
   if [[ -f $1 ]]; then
     echo $(($(wc -l <"$1") - 1))
