@@ -55,9 +55,10 @@ pub(super) fn run_batches<D: Sync, R: Send>(
     })
 }
 
-/// Hands `days` to the pool batch by batch ([`interleaved`] within each), at most two per worker ahead of the results, and
-/// each whole batch with its results to `handed`, in order; stops taking at a stop's next
-/// batch boundary, after a failed day and once `write_failed`. Returns the days taken.
+/// Hands `days` to the pool batch by batch ([`interleaved`] within each), at most two per
+/// worker ahead of the results, and each whole batch with its results to `handed`, in
+/// order; stops taking at a stop's next batch boundary, after a failed day and once
+/// `write_failed`. Returns the days taken.
 fn take_days<D: Sync, R: Send>(
     days: &[D],
     per_batch: usize,
@@ -103,14 +104,8 @@ fn take_days<D: Sync, R: Send>(
                 let results = (next..end).map(|j| held.remove(&j).expect("held"));
                 match results.collect::<Result<Vec<R>>>() {
                     Ok(r) => handed(next, end, r),
-                    Err(e) => {
-                        // Wait for the days running, not for their results.
-                        while running > 0 {
-                            receive(&rx);
-                            running -= 1;
-                        }
-                        return Err(e);
-                    }
+                    // The scope waits for the days still running.
+                    Err(e) => return Err(e),
                 }
                 next = end;
             }
