@@ -1,15 +1,22 @@
 //! Days computed in parallel and handed on in batches, in order, without the workers
 //! waiting at each batch's end. Each batch ended waiting for its slowest day: with one
 //! batch for the whole year instead of twelve, a warm office year took 0.94× the time
-//! (paired runs, 2026-12-07). The calling thread hands days to the pool batch by batch,
-//! at most two per worker ahead of the results, and a writer thread writes each batch
-//! once all its days are in. So the results held are about a batch, and a stop ends at
-//! the batch begun.
+//! (paired runs, 2026-12-07).
+//!
+//! Each worker of the pool runs a loop of its own (`spawn_broadcast`) that takes the next
+//! day, computes it and files its result; the worker that completes a batch hands it to a
+//! writer thread, which writes it while later days are computed. A day is never a job in
+//! a queue: when days were spawned into the pool, a worker that waited inside one day's
+//! nested `par_iter` took a whole later day from the queue, and the earlier day finished
+//! only after it. Under `--forward` a 10-day shard then wrote all its days at its end, and
+//! a job killed mid-shard had nothing to resume from (the Slurm test of 2026-12-07).
+//! Taking stops a bounded number of days ahead of what is written, so the results held
+//! are about two batches, and a stop ends at the batch begun.
 
 use crate::error::Result;
 use std::collections::BTreeMap;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{mpsc, Mutex};
 
 /// Runs `day` on each of `days` in parallel and gives `batch` each run of `per_batch`
 /// days (the last may be shorter) with their results, in order, once all of them are
@@ -18,8 +25,8 @@ use std::sync::mpsc;
 /// finished and handed on; returns whether it came before the last day.
 ///
 /// # Errors
-/// The first (in day order) of `day`'s errors among the days computed, after the batches before it are handed
-/// on; days not yet taken are then not computed. Or `batch`'s error.
+/// The first (in day order) of `day`'s errors among the days computed, after the batches
+/// before it are handed on; days not yet taken are then not computed. Or `batch`'s error.
 pub(super) fn run_batches<D: Sync, R: Send>(
     days: &[D],
     per_batch: usize,
@@ -28,25 +35,28 @@ pub(super) fn run_batches<D: Sync, R: Send>(
     mut batch: impl FnMut(&[D], Vec<R>) -> Result<()> + Send,
 ) -> Result<bool> {
     let per_batch = per_batch.max(1);
-    let write_failed = AtomicBool::new(false);
+    let ends = Ends {
+        written: AtomicUsize::new(0),
+        write_failed: AtomicBool::new(false),
+    };
     std::thread::scope(|ts| {
-        // One batch may wait while another is written; a slower writer holds the days
-        // back.
-        let (btx, brx) = mpsc::sync_channel::<(usize, usize, Vec<R>)>(1);
+        // Unbounded: the workers must never block on the writer, whose work may need them
+        // (light paths' batched sums run in the pool). Taking waits instead (`Ends`).
+        let (btx, brx) = mpsc::channel::<(usize, usize, Vec<R>)>();
         let writer = ts.spawn(|| {
             for (a, b, results) in brx {
                 if let Err(e) = batch(&days[a..b], results) {
-                    write_failed.store(true, Ordering::SeqCst);
+                    ends.write_failed.store(true, Ordering::SeqCst);
                     return Err(e);
                 }
+                ends.written.store(b, Ordering::SeqCst);
             }
             Ok(())
         });
-        let taken = take_days(days, per_batch, stop, &write_failed, &day, |a, b, r| {
+        let taken = take_days(days, per_batch, stop, &ends, &day, move |a, b, r| {
             // The writer is gone only once it failed, which it returns below.
             let _ = btx.send((a, b, r));
         });
-        drop(btx);
         let wrote = writer
             .join()
             .unwrap_or_else(|p| std::panic::resume_unwind(p));
@@ -55,65 +65,97 @@ pub(super) fn run_batches<D: Sync, R: Send>(
     })
 }
 
-/// Hands `days` to the pool batch by batch ([`interleaved`] within each), at most two per
-/// worker ahead of the results, and each whole batch with its results to `handed`, in
-/// order; stops taking at a stop's next batch boundary, after a failed day and once
-/// `write_failed`. Returns the days taken.
+/// What the writer has done: the days written (all before this index), and whether a
+/// write failed.
+struct Ends {
+    written: AtomicUsize,
+    write_failed: AtomicBool,
+}
+
+/// The days' shared state: how many were taken, the first not handed on, the results
+/// held until their batch is whole, whether a day failed.
+struct Feed<R, H> {
+    taken: usize,
+    next: usize,
+    held: BTreeMap<usize, Result<R>>,
+    failed: bool,
+    handed: H,
+}
+
+/// Lets each worker of the pool take days in turn ([`interleaved`] within each batch) and
+/// hands each whole batch with its results to `handed`, in order; stops taking at a
+/// stop's next batch boundary, after a failed day and once a write failed. A worker waits
+/// (running the pool's other work) before taking a day more than two batches and a day per
+/// worker ahead of what is written. Returns the days taken.
 fn take_days<D: Sync, R: Send>(
     days: &[D],
     per_batch: usize,
     stop: &AtomicBool,
-    write_failed: &AtomicBool,
+    ends: &Ends,
     day: &(impl Fn(&D) -> Result<R> + Sync),
-    mut handed: impl FnMut(usize, usize, Vec<R>),
+    handed: impl FnMut(usize, usize, Vec<R>) + Send,
 ) -> Result<usize> {
-    // More days ahead start more at once: a cold office year's peak doubled with a
-    // batch ahead, as workers waiting inside a day took up others.
-    let ahead = 2 * rayon::current_num_threads().max(1);
-    let (tx, rx) = mpsc::channel::<(usize, Result<R>)>();
-    let mut taken = 0;
-    rayon::in_place_scope_fifo(|s| -> Result<()> {
-        let (mut running, mut next, mut failed) = (0, 0, false);
-        let mut held: BTreeMap<usize, Result<R>> = BTreeMap::new();
-        loop {
-            failed |= write_failed.load(Ordering::SeqCst);
-            while !failed && taken < days.len() && running < ahead {
-                if taken % per_batch == 0 && stop.load(Ordering::SeqCst) {
+    let ahead = 2 * per_batch + rayon::current_num_threads().max(1);
+    let feed = Mutex::new(Feed {
+        taken: 0,
+        next: 0,
+        held: BTreeMap::new(),
+        failed: false,
+        handed,
+    });
+    let lock = || feed.lock().unwrap_or_else(|p| p.into_inner());
+    rayon::in_place_scope(|s| {
+        s.spawn_broadcast(|_, _| loop {
+            let t = {
+                let mut f = lock();
+                f.failed |= ends.write_failed.load(Ordering::SeqCst);
+                let boundary = f.taken % per_batch == 0;
+                if f.failed || f.taken == days.len() || (boundary && stop.load(Ordering::SeqCst)) {
+                    return;
+                }
+                if f.taken >= ends.written.load(Ordering::SeqCst) + ahead {
+                    drop(f);
+                    pause();
+                    continue;
+                }
+                f.taken += 1;
+                f.taken - 1
+            };
+            let i = interleaved(t, per_batch, days.len());
+            let r = day(&days[i]);
+            let mut f = lock();
+            f.failed |= r.is_err();
+            f.held.insert(i, r);
+            // Every batch whose days are all here, in order; none from a failed one on.
+            let f = &mut *f;
+            while f.next < days.len() {
+                let (a, b) = (f.next, (f.next + per_batch).min(days.len()));
+                if !(a..b).all(|j| matches!(f.held.get(&j), Some(Ok(_)))) {
                     break;
                 }
-                let (i, tx) = (interleaved(taken, per_batch, days.len()), tx.clone());
-                s.spawn_fifo(move |_| {
-                    // The receiver is gone only once the run failed: nothing to do.
-                    let _ = tx.send((i, day(&days[i])));
+                let results = (a..b).map(|j| match f.held.remove(&j) {
+                    Some(Ok(r)) => r,
+                    _ => unreachable!("checked above"),
                 });
-                (taken, running) = (taken + 1, running + 1);
+                (f.handed)(a, b, results.collect());
+                f.next = b;
             }
-            if running == 0 {
-                break;
-            }
-            let (i, r) = receive(&rx).expect("a sender is kept here");
-            running -= 1;
-            failed |= r.is_err();
-            held.insert(i, r);
-            // Every batch whose days are all here, in order.
-            while next < days.len() {
-                let end = (next + per_batch).min(days.len());
-                if !(next..end).all(|j| held.contains_key(&j)) {
-                    break;
-                }
-                let results = (next..end).map(|j| held.remove(&j).expect("held"));
-                match results.collect::<Result<Vec<R>>>() {
-                    Ok(r) => handed(next, end, r),
-                    // The scope waits for the days still running.
-                    Err(e) => return Err(e),
-                }
-                next = end;
-            }
-        }
-        // A failed day in a batch whose later days were then not taken.
-        held.into_values().find_map(Result::err).map_or(Ok(()), Err)
-    })?;
-    Ok(taken)
+        });
+    });
+    let f = feed.into_inner().unwrap_or_else(|p| p.into_inner());
+    // The first failed day, in day order.
+    match f.held.into_values().find_map(Result::err) {
+        Some(e) => Err(e),
+        None => Ok(f.taken),
+    }
+}
+
+/// A worker's wait for the writer: the pool's other work if there is any (the writer's
+/// own may be among it), else a short sleep.
+fn pause() {
+    if rayon::yield_now() != Some(rayon::Yield::Executed) {
+        std::thread::sleep(std::time::Duration::from_micros(200));
+    }
 }
 
 /// The day taken `t`-th: within each batch, the first half's days alternate with the
@@ -125,26 +167,6 @@ fn interleaved(t: usize, per_batch: usize, n: usize) -> usize {
     let (o, len) = (t - start, per_batch.min(n - start));
     let half = len.div_ceil(2);
     start + if o % 2 == 0 { o / 2 } else { half + o / 2 }
-}
-
-/// The next day's result. On a worker of a pool (a caller inside `ThreadPool::install`),
-/// waiting runs the pool's other work, so that a pool of one thread still computes the
-/// days.
-fn receive<T>(rx: &mpsc::Receiver<T>) -> Option<T> {
-    if rayon::current_thread_index().is_none() {
-        return rx.recv().ok();
-    }
-    loop {
-        match rx.try_recv() {
-            Ok(m) => return Some(m),
-            Err(mpsc::TryRecvError::Disconnected) => return None,
-            Err(mpsc::TryRecvError::Empty) => {
-                if rayon::yield_now() != Some(rayon::Yield::Executed) {
-                    std::thread::sleep(std::time::Duration::from_micros(100));
-                }
-            }
-        }
-    }
 }
 
 #[cfg(test)]
@@ -218,6 +240,37 @@ mod tests {
             got.into_iter().flat_map(|(_, r)| r).collect::<Vec<_>>(),
             want
         );
+    }
+
+    #[test]
+    fn a_worker_never_takes_a_day_inside_another() {
+        use rayon::prelude::*;
+        use std::cell::Cell;
+        thread_local!(static IN_DAY: Cell<bool> = const { Cell::new(false) });
+        let nested = AtomicUsize::new(0);
+        // Days whose work is a nested parallel loop, in which a worker waits for the
+        // parts others took and meanwhile runs what it finds.
+        let day = |d: &u64| {
+            if IN_DAY.with(|c| c.replace(true)) {
+                nested.fetch_add(1, Ordering::SeqCst);
+            }
+            let r = (0..64u64)
+                .into_par_iter()
+                .map(|k| work(&(d * 64 + k)).unwrap())
+                .reduce(|| 0, |a, b| a ^ b);
+            IN_DAY.with(|c| c.set(false));
+            Ok(r)
+        };
+        let days: Vec<u64> = (0..200).collect();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(4)
+            .build()
+            .unwrap();
+        let (r, got) = pool.install(|| run(&days, 8, &AtomicBool::new(false), day));
+        assert!(!r.unwrap());
+        assert_eq!(got.iter().map(|(b, _)| b.len()).sum::<usize>(), 200);
+        // A day taken inside another holds it (and every day after it) back until done.
+        assert_eq!(nested.load(Ordering::SeqCst), 0, "days taken inside a day");
     }
 
     #[test]

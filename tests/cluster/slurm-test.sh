@@ -347,8 +347,9 @@ partial_sun=$shard_dir/direct_sun.csv.partial
 until_state "${array}_$victim" RUNNING
 # A checkpoint is a whole batch of days (24 hourly rows a day; a batch is an eighth of the
 # shard's days, at least one) behind the header, in both tables: the first one is waited
-# for. Days are written in order, and a day that waits inside a worker for work another
-# day took can hold later days back, so later checkpoints may come in bursts.
+# for. Each worker takes its days itself, so a day is never held back by a later one that
+# a worker took while waiting inside it (sequence/day_feed.rs), and checkpoints follow the
+# days; the first comes once the first days in flight are done.
 rows=24
 rows_in() { # FILE → its rows after the header (0 when absent)
   if [[ -f $1 ]]; then
