@@ -85,17 +85,20 @@ fn resumed_and_sharded_runs_equal_one_run() {
     assert_eq!(r.steps, 240);
     assert!(r.night > 0 && r.sun_steps > 0);
 
-    // Interrupted after the first batch of days (the stop flag, as Ctrl-C sets it) ...
+    // Interrupted once two days are written (the stop flag, as Ctrl-C sets it; batches
+    // are a day each on ten days), so that the kill inside the last row below leaves a
+    // whole day to resume: a stop after the first day could leave that day alone, when
+    // no worker had taken a second ...
     let stopped = d.path().join("stopped");
     let stop = AtomicBool::new(false);
-    let stop_after_first = |done: usize, _: usize| {
-        if done > 0 {
+    let stop_after_two_days = |done: usize, _: usize| {
+        if done >= 48 {
             stop.store(true, Ordering::SeqCst);
         }
     };
     let c = RunControl {
         stop: &stop,
-        progress: &stop_after_first,
+        progress: &stop_after_two_days,
         coefficient_progress: &|_, _| {},
     };
     let r1 = run_annual(
