@@ -44,6 +44,8 @@ pub(super) fn run_batches<D: Sync, R: Send>(
         // (light paths' batched sums run in the pool). Taking waits instead (`Ends`).
         let (btx, brx) = mpsc::channel::<(usize, usize, Vec<R>)>();
         let writer = ts.spawn(|| {
+            // A panic here must also stop the workers, who may wait for what it writes.
+            let _flag = OnUnwind(&ends.write_failed);
             for (a, b, results) in brx {
                 if let Err(e) = batch(&days[a..b], results) {
                     ends.write_failed.store(true, Ordering::SeqCst);
@@ -104,11 +106,15 @@ fn take_days<D: Sync, R: Send>(
         handed,
     });
     let lock = || feed.lock().unwrap_or_else(|p| p.into_inner());
+    // Set by a day that panicked: the others stop taking, and the scope then re-raises
+    // the panic, rather than after the rest of the year.
+    let panicked = AtomicBool::new(false);
     rayon::in_place_scope(|s| {
         s.spawn_broadcast(|_, _| loop {
             let t = {
                 let mut f = lock();
                 f.failed |= ends.write_failed.load(Ordering::SeqCst);
+                f.failed |= panicked.load(Ordering::SeqCst);
                 let boundary = f.taken % per_batch == 0;
                 if f.failed || f.taken == days.len() || (boundary && stop.load(Ordering::SeqCst)) {
                     return;
@@ -122,7 +128,10 @@ fn take_days<D: Sync, R: Send>(
                 f.taken - 1
             };
             let i = interleaved(t, per_batch, days.len());
-            let r = day(&days[i]);
+            let r = {
+                let _flag = OnUnwind(&panicked);
+                day(&days[i])
+            };
             let mut f = lock();
             f.failed |= r.is_err();
             f.held.insert(i, r);
@@ -147,6 +156,17 @@ fn take_days<D: Sync, R: Send>(
     match f.held.into_values().find_map(Result::err) {
         Some(e) => Err(e),
         None => Ok(f.taken),
+    }
+}
+
+/// Sets its flag when dropped by a panic's unwinding.
+struct OnUnwind<'a>(&'a AtomicBool);
+
+impl Drop for OnUnwind<'_> {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.0.store(true, Ordering::SeqCst);
+        }
     }
 }
 
@@ -271,6 +291,39 @@ mod tests {
         assert_eq!(got.iter().map(|(b, _)| b.len()).sum::<usize>(), 200);
         // A day taken inside another holds it (and every day after it) back until done.
         assert_eq!(nested.load(Ordering::SeqCst), 0, "days taken inside a day");
+    }
+
+    #[test]
+    fn a_panicking_day_ends_the_run_soon_and_is_raised() {
+        let days: Vec<u64> = (0..400).collect();
+        let computed = AtomicUsize::new(0);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            pool.install(|| {
+                run(&days, 8, &AtomicBool::new(false), |d| {
+                    assert!(*d != 20, "day 20");
+                    computed.fetch_add(1, Ordering::SeqCst);
+                    work(d)
+                })
+            })
+        }));
+        assert!(r.is_err(), "the panic is raised");
+        // The days taken before the others saw it: a few beyond day 20, not the year.
+        let n = computed.load(Ordering::SeqCst);
+        assert!(n < 100, "{n} days computed after a panic");
+        // A writer that panics stops the workers too (they wait for what it writes).
+        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            pool.install(|| {
+                run_batches(&days, 8, &AtomicBool::new(false), work, |b, _| {
+                    assert!(b[0] != 16, "batch 16");
+                    Ok(())
+                })
+            })
+        }));
+        assert!(r.is_err(), "the writer's panic is raised");
     }
 
     #[test]
