@@ -309,9 +309,10 @@ pub fn run_annual(
             .and_then(|d| d.first())
             .map(|s| s.time.date()),
     };
+    let per_batch = days_per_batch(scene.sensors.len(), days.len());
     if let Some(p) = &paths {
         // The paths' series start at the first step: the resumed days' rows again.
-        for batch in days[..resumed_days].chunks(days_per_batch(scene.sensors.len(), days.len())) {
+        for batch in days[..resumed_days].chunks(per_batch) {
             let rows: Vec<Result<Vec<Option<PathValues>>>> = batch
                 .par_iter()
                 .map(|day| day.par_iter().map(|s| ctx.path_step(s)).collect())
@@ -369,7 +370,6 @@ pub fn run_annual(
         Ok(())
     };
     if !report.interrupted {
-        let per_batch = days_per_batch(scene.sensors.len(), days.len());
         let stopped = engine.peaks().measure("steps", || {
             day_feed::run_batches(todo, per_batch, stop, |day| ctx.run_day(day), &mut hand_on)
         })?;
