@@ -105,6 +105,11 @@ impl ChannelValues {
         Some(ChannelValues { values, rgb })
     }
 
+    /// The stored values ([`Self::as_slice`]), given up.
+    pub fn into_values(self) -> Vec<f32> {
+        self.values
+    }
+
     /// Frees the spare capacity of the growth by pushes.
     pub fn shrink_to_fit(&mut self) {
         self.values.shrink_to_fit();

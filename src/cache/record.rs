@@ -545,6 +545,17 @@ impl MappedRecord {
             Backing::Owned { words, len } => &bytemuck::cast_slice::<u64, u8>(words)[..*len],
         }
     }
+    /// Gives the map's resident pages back to the kernel (`MADV_DONTNEED`): the process's
+    /// resident memory no longer counts them, and a later read faults them in again from
+    /// the file (the page cache, usually), with the same bytes. For a large record read
+    /// in parts (the operator), so that only the part being read stays resident. Nothing
+    /// for a record held in memory; a failed advice only leaves the pages resident.
+    pub fn release(&self) {
+        if let Backing::Map(m) = &self.data {
+            release_map(m);
+        }
+    }
+
     /// True when backed by a memory-mapped file.
     pub fn is_mapped(&self) -> bool {
         matches!(self.data, Backing::Map(_))
@@ -578,6 +589,18 @@ impl MappedRecord {
     pub fn u32s(&self, tag: u32) -> Result<&[u32], Invalid> {
         self.section(tag)
     }
+}
+
+/// `MADV_DONTNEED` on a read-only file map ([`MappedRecord::release`]).
+#[allow(unsafe_code)]
+fn release_map(map: &memmap2::Mmap) {
+    // SAFETY: `unchecked_advise` is unsafe because `MADV_DONTNEED` discards a private
+    // mapping's modified pages, which would change what the map reads. Ours is a
+    // read-only shared map of a record file (`Store::get`, `map_readonly`): it has no
+    // modified pages, and a page discarded here is read again from the same file, whose
+    // bytes daystep never changes in place (records are replaced by rename). So every
+    // later read sees the bytes `Record::validate` checked; only residency changes.
+    let _ = unsafe { map.unchecked_advise(memmap2::UncheckedAdvice::DontNeed) };
 }
 
 #[cfg(test)]

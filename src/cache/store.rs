@@ -236,8 +236,25 @@ impl Store {
     /// in `rebuilds` and named in a warning (the first one per store; later ones are
     /// summarised). A hit marks the file as recently used for eviction. Never panics.
     pub fn get(&self, key: &RecordKey) -> Option<MappedRecord> {
+        self.read(key, true)
+    }
+
+    /// The record this store has just written for `key` ([`Self::put`]), read back
+    /// (memory-mapped when large) to be used in place of the copy it was written from;
+    /// validated as [`Self::get`] does, but counted neither as a hit nor as a miss: a cold
+    /// run's counters stay all misses. `None` when it is gone or invalid.
+    pub fn read_back(&self, key: &RecordKey) -> Option<MappedRecord> {
+        self.read(key, false)
+    }
+
+    fn read(&self, key: &RecordKey, count: bool) -> Option<MappedRecord> {
+        let miss = || {
+            if count {
+                self.misses.fetch_add(1, Relaxed);
+            }
+        };
         let Some(dir) = &self.dir else {
-            self.misses.fetch_add(1, Relaxed);
+            miss();
             return None;
         };
         let path = dir.join(key.file_name());
@@ -249,7 +266,7 @@ impl Store {
                         format!("cache: cannot read {}: {e}", path.display())
                     });
                 }
-                self.misses.fetch_add(1, Relaxed);
+                miss();
                 return None;
             }
         };
@@ -277,13 +294,14 @@ impl Store {
                     self.warn_once(&self.warned_read, || {
                         format!("cache: cannot map {}: {e}", path.display())
                     });
-                    self.misses.fetch_add(1, Relaxed);
+                    miss();
                     return None;
                 }
             };
             MappedRecord::from_map(map, key)
         };
         match record {
+            Ok(r) if !count => Some(r),
             Ok(r) => {
                 self.hits.fetch_add(1, Relaxed);
                 self.bytes_mapped.fetch_add(len, Relaxed);
@@ -477,6 +495,29 @@ mod tests {
     /// A record of the same size for every direction `d`.
     fn bytes(d: u64) -> Vec<u8> {
         encode(&key(d), &[Section::f64s(300, &[d as f64; 64])])
+    }
+
+    /// A record above [`READ_MAX_BYTES`] is mapped; giving its pages back leaves its
+    /// bytes as they were (read again from the file).
+    #[test]
+    fn a_mapped_record_reads_the_same_after_its_pages_are_given_back() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(dir.path(), DEFAULT_MAX_BYTES);
+        let values: Vec<f64> = (0..(READ_MAX_BYTES as usize / 4))
+            .map(|i| i as f64)
+            .collect();
+        store.put(&key(1), &encode(&key(1), &[Section::f64s(300, &values)]));
+        let r = store.get(&key(1)).unwrap();
+        assert!(r.is_mapped());
+        assert_eq!(r.f64s(300).unwrap(), &values[..]);
+        r.release();
+        assert_eq!(r.f64s(300).unwrap(), &values[..]);
+        r.release();
+        r.release();
+        assert_eq!(
+            r.f64s(300).unwrap()[values.len() - 1],
+            values[values.len() - 1]
+        );
     }
 
     #[test]

@@ -83,17 +83,31 @@ impl Transport {
             })
     }
 
-    /// Bytes the operator holds: its sparse matrices (4-byte offsets and columns, 4-byte
-    /// values, one per entry when grey, else three), the per-row reflectance and emission,
-    /// and the mesh (about 160 bytes per row with its element hierarchy).
+    /// Bytes the operator keeps resident while the adjoint solves read it: its sparse
+    /// matrices held in memory (4-byte offsets and columns, 4-byte values, one per entry
+    /// when grey, else three), the largest part's matrices read in place from its cache
+    /// record (the solves give a part's pages back when done with it,
+    /// [`Transport::release_pages`]), the per-row reflectance and emission, and the mesh
+    /// (about 160 bytes per row with its element hierarchy).
     pub fn bytes(&self) -> u64 {
-        let sparse = |s: &super::sparse::Sparse| s.bytes();
-        let matrices: u64 = self
+        let owned: u64 = self
             .parts
             .iter()
-            .map(|p| sparse(&p.f) + sparse(&p.g) + sparse(&p.f_coarse) + sparse(&p.g_coarse))
+            .flat_map(|p| p.matrices())
+            .map(|m| m.owned_bytes())
             .sum();
-        matrices + (self.rows() as u64) * (2 * 24 + 160) + self.mesh.coarse_rows as u64 * 32
+        let mapped = self
+            .parts
+            .iter()
+            .map(|p| {
+                p.matrices()
+                    .iter()
+                    .map(|m| m.bytes() - m.owned_bytes())
+                    .sum::<u64>()
+            })
+            .max()
+            .unwrap_or(0);
+        owned + mapped + (self.rows() as u64) * (2 * 24 + 160) + self.mesh.coarse_rows as u64 * 32
     }
 
     /// Channels the adjoint responses keep: 1 for a grey operator, else 3.
@@ -200,6 +214,9 @@ impl Transport {
     ) -> (Vec<T>, u64) {
         let (f, g, rho) = self.level(p, l);
         let adjoint = Adjoint::of(f, rho, self.adjoint_channels());
+        // The transposed copy is what the sweeps read: the operator's pages read in place
+        // go back to the kernel, as do the gather's once the solves are done.
+        self.release_pages();
         let k = self.parts.first().map_or(0, |p| p.g.rows());
         let (tol, max) = (self.params.tolerance, self.params.max_sweeps);
         let solved: Vec<(T, u32)> = subs
@@ -209,6 +226,7 @@ impl Transport {
                 (keep(b, x), n)
             })
             .collect();
+        self.release_pages();
         let sweeps = solved.iter().map(|s| s.1 as u64).sum();
         (solved.into_iter().map(|s| s.0).collect(), sweeps)
     }

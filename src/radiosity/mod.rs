@@ -17,7 +17,7 @@ mod gather; // sensor gather matrix, and the sensors' reading of a solution
 pub mod mesh; // the fixed mesh: unknowns, point → row, area averages onto it
 pub mod response; // adjoint daylight coefficients
 mod solve; // Gauss–Seidel, stop rule, warm start
-mod sparse; // sparse RGB rows
+mod sparse; // sparse RGB rows, held or read in place from a cache record
 mod strata; // equal-area direction strata of the bundles
 pub mod transport; // the Transport type, its parameters and build
 
@@ -26,6 +26,7 @@ pub use gather::TransportSensor;
 pub use mesh::Mesh;
 pub use response::{DirectionResponse, SensorResponse};
 pub use solve::{TransportReport, TransportState};
+pub use sparse::Buf;
 pub use transport::{Transport, TransportParams, TransportStats};
 
 use crate::photometry::Rgb;

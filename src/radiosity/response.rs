@@ -266,10 +266,11 @@ impl Adjoint {
     /// The adjoint of operator `f` with reflectances `rho`, keeping `channels` values per
     /// entry.
     pub(super) fn of(f: &Sparse, rho: &[Rgb], channels: usize) -> Adjoint {
+        let f = f.view();
         let n = f.rows();
         let ch = channels;
         let mut count = vec![0u32; n + 1];
-        for &c in &f.cols {
+        for &c in f.cols {
             count[c as usize + 1] += 1;
         }
         for i in 0..n {
@@ -315,6 +316,7 @@ impl Adjoint {
         tol: f64,
         max_sweeps: u32,
     ) -> (Vec<f32>, u32) {
+        let g = g.view();
         let n = self.count.len() - 1;
         let w = range.len();
         let ch = self.channels;

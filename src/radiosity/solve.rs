@@ -164,6 +164,7 @@ fn gauss_seidel(
     tol: f64,
     max_sweeps: u32,
 ) -> (u32, f64) {
+    let f = f.view();
     let s_max = s.iter().map(|x| grey(x.abs())).fold(0.0, f64::max);
     if s_max == 0.0 {
         b.iter_mut().for_each(|x| *x = Rgb::ZERO);

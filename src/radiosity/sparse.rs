@@ -1,35 +1,122 @@
 //! Sparse matrices of the operator and the gather: compressed rows with f32 values, one
 //! per entry when every entry is grey (the same in R, G and B), else three; a row–vector
-//! product and column aggregation (for the coarse level).
+//! product and column aggregation (for the coarse level). The arrays are held in memory
+//! or read in place from the operator's memory-mapped cache record ([`Buf`]).
 
+use crate::cache::MappedRecord;
 use crate::photometry::{ChannelValues, Rgb};
+use std::ops::Deref;
+use std::sync::Arc;
 
-/// Sparse rows: row r holds (column, value) pairs `cols[offsets[r]..offsets[r+1]]`, entry
-/// k's value `vals.get(k)`.
-#[derive(Clone, Debug, Default)]
-pub(super) struct Sparse {
-    pub(super) offsets: Vec<u32>,
-    pub(super) cols: Vec<u32>,
-    pub(super) vals: ChannelValues,
+/// An array of `T`, owned or read in place from a memory-mapped cache record.
+///
+/// Why: the operator is a run's largest holding (about 250 MB on the generated
+/// building), and once it is stored the record already holds the same bytes. Read in
+/// place, its pages can be given back to the kernel whenever a stage is done with them
+/// ([`MappedRecord::release`]) and come back from the page cache when read again, instead
+/// of staying resident for the whole stage.
+#[derive(Debug)]
+pub enum Buf<T> {
+    /// Held in memory.
+    Owned(Vec<T>),
+    /// Bytes `bytes` of `record`.
+    Mapped {
+        /// The record that holds the array.
+        record: Arc<MappedRecord>,
+        /// Where in the record's bytes.
+        bytes: std::ops::Range<usize>,
+        /// The element type.
+        _t: std::marker::PhantomData<T>,
+    },
 }
 
-impl Sparse {
+impl<T> Default for Buf<T> {
+    fn default() -> Self {
+        Buf::Owned(Vec::new())
+    }
+}
+
+impl<T: Clone> Clone for Buf<T> {
+    fn clone(&self) -> Self {
+        match self {
+            Buf::Owned(v) => Buf::Owned(v.clone()),
+            Buf::Mapped { record, bytes, .. } => Buf::Mapped {
+                record: Arc::clone(record),
+                bytes: bytes.clone(),
+                _t: std::marker::PhantomData,
+            },
+        }
+    }
+}
+
+impl<T: bytemuck::Pod> Buf<T> {
+    /// `slice`, which must lie inside `record`'s bytes, read in place; `None` otherwise.
+    pub fn mapped(record: &Arc<MappedRecord>, slice: &[T]) -> Option<Buf<T>> {
+        let base = record.bytes().as_ptr() as usize;
+        let start = (slice.as_ptr() as usize).checked_sub(base)?;
+        let end = start + std::mem::size_of_val(slice);
+        (end <= record.bytes().len()).then(|| Buf::Mapped {
+            record: Arc::clone(record),
+            bytes: start..end,
+            _t: std::marker::PhantomData,
+        })
+    }
+
+    /// The record it is read from, if any.
+    pub fn record(&self) -> Option<&Arc<MappedRecord>> {
+        match self {
+            Buf::Owned(_) => None,
+            Buf::Mapped { record, .. } => Some(record),
+        }
+    }
+}
+
+impl<T: bytemuck::Pod> Deref for Buf<T> {
+    type Target = [T];
+    #[inline]
+    fn deref(&self) -> &[T] {
+        match self {
+            Buf::Owned(v) => v,
+            Buf::Mapped { record, bytes, .. } => {
+                bytemuck::cast_slice(&record.bytes()[bytes.clone()])
+            }
+        }
+    }
+}
+
+/// Sparse rows: row r holds (column, value) pairs `cols[offsets[r]..offsets[r+1]]`, entry
+/// k's value `vals[k]` (grey) or `vals[3k..3k + 3]` (RGB).
+#[derive(Clone, Debug, Default)]
+pub(super) struct Sparse {
+    pub(super) offsets: Buf<u32>,
+    pub(super) cols: Buf<u32>,
+    pub(super) vals: Buf<f32>,
+    pub(super) rgb: bool,
+}
+
+/// A [`Sparse`]'s arrays as slices, taken once before a loop over its entries (a mapped
+/// array's slice costs a few checks each time it is taken).
+#[derive(Clone, Copy)]
+pub(super) struct View<'a> {
+    pub(super) offsets: &'a [u32],
+    pub(super) cols: &'a [u32],
+    pub(super) vals: &'a [f32],
+    pub(super) rgb: bool,
+}
+
+impl View<'_> {
     /// Entry `k`'s value in R, G and B.
     #[inline]
     pub(super) fn val(&self, k: usize) -> [f32; 3] {
-        self.vals.get(k)
+        if self.rgb {
+            [self.vals[3 * k], self.vals[3 * k + 1], self.vals[3 * k + 2]]
+        } else {
+            [self.vals[k]; 3]
+        }
     }
 
-    /// Whether every entry is grey (then stored with one value each).
-    pub(super) fn is_grey(&self) -> bool {
-        self.vals.is_grey()
-    }
-
-    /// Bytes of its arrays.
-    pub(super) fn bytes(&self) -> u64 {
-        4 * (self.offsets.len() + self.cols.len()) as u64 + self.vals.bytes()
-    }
-
+    /// Row `r`'s product with `x`.
+    #[inline]
     pub(super) fn row_dot(&self, r: usize, x: &[Rgb]) -> Rgb {
         let (a, b) = (self.offsets[r] as usize, self.offsets[r + 1] as usize);
         let mut s = Rgb::ZERO;
@@ -41,8 +128,76 @@ impl Sparse {
         s
     }
 
+    /// Number of rows.
     pub(super) fn rows(&self) -> usize {
         self.offsets.len().saturating_sub(1)
+    }
+}
+
+impl Sparse {
+    /// Its arrays as slices.
+    #[inline]
+    pub(super) fn view(&self) -> View<'_> {
+        View {
+            offsets: &self.offsets,
+            cols: &self.cols,
+            vals: &self.vals,
+            rgb: self.rgb,
+        }
+    }
+
+    /// Whether every entry is grey (then stored with one value each).
+    pub(super) fn is_grey(&self) -> bool {
+        !self.rgb
+    }
+
+    /// Bytes of its arrays.
+    pub(super) fn bytes(&self) -> u64 {
+        4 * (self.offsets.len() + self.cols.len() + self.vals.len()) as u64
+    }
+
+    /// Bytes of its arrays held in memory (not read in place from a record).
+    pub(super) fn owned_bytes(&self) -> u64 {
+        let owned = |len: usize, mapped: bool| if mapped { 0 } else { 4 * len as u64 };
+        owned(self.offsets.len(), self.offsets.record().is_some())
+            + owned(self.cols.len(), self.cols.record().is_some())
+            + owned(self.vals.len(), self.vals.record().is_some())
+    }
+
+    pub(super) fn row_dot(&self, r: usize, x: &[Rgb]) -> Rgb {
+        self.view().row_dot(r, x)
+    }
+
+    pub(super) fn rows(&self) -> usize {
+        self.offsets.len().saturating_sub(1)
+    }
+
+    /// Row offsets, columns and values (one per entry when grey, else three), checked
+    /// against the shape (`rows`, `columns`): `None` when they do not fit, so a stale or
+    /// foreign record is never used.
+    pub(super) fn from_parts(
+        offsets: Buf<u32>,
+        cols: Buf<u32>,
+        vals: Buf<f32>,
+        (rows, columns): (usize, usize),
+    ) -> Option<Sparse> {
+        let rgb = match vals.len() {
+            n if n == cols.len() => false,
+            n if n == 3 * cols.len() => true,
+            _ => return None,
+        };
+        let ok = offsets.len() == rows + 1
+            && offsets.first() == Some(&0)
+            && offsets.windows(2).all(|w| w[0] <= w[1])
+            && *offsets.last().unwrap_or(&1) as usize == cols.len()
+            && cols.iter().all(|&j| (j as usize) < columns)
+            && vals.iter().all(|x| x.is_finite());
+        ok.then_some(Sparse {
+            offsets,
+            cols,
+            vals,
+            rgb,
+        })
     }
 
     /// Builds rows from (row, col, value) triples sorted by (row, col), no duplicates.
@@ -65,10 +220,12 @@ impl Sparse {
         // matrices are held for the whole set-up.
         cols.shrink_to_fit();
         vals.shrink_to_fit();
+        let rgb = !vals.is_grey();
         Sparse {
-            offsets,
-            cols,
-            vals,
+            offsets: Buf::Owned(offsets),
+            cols: Buf::Owned(cols),
+            vals: Buf::Owned(vals.into_values()),
+            rgb,
         }
     }
 
@@ -85,10 +242,11 @@ impl Sparse {
 
     /// Row `r` with its columns aggregated through `map`, sorted by column.
     pub(super) fn mapped_row(&self, r: usize, map: &[u32]) -> Vec<(u32, [f32; 3])> {
-        let (a, b) = (self.offsets[r] as usize, self.offsets[r + 1] as usize);
+        let m = self.view();
+        let (a, b) = (m.offsets[r] as usize, m.offsets[r + 1] as usize);
         merge_columns(
             (a..b)
-                .map(|k| (map[self.cols[k] as usize], self.val(k)))
+                .map(|k| (map[m.cols[k] as usize], m.val(k)))
                 .collect(),
         )
     }
@@ -126,7 +284,10 @@ mod tests {
         let mixed = [(0, 1, [0.5f32; 3]), (1, 0, [0.1, 0.2, 0.3])];
         let m = Sparse::from_sorted(2, mixed.into_iter());
         assert!(!m.is_grey());
-        assert_eq!((m.val(0), m.val(1)), ([0.5; 3], [0.1, 0.2, 0.3]));
+        assert_eq!(
+            (m.view().val(0), m.view().val(1)),
+            ([0.5; 3], [0.1, 0.2, 0.3])
+        );
         let x = [Rgb::new(1.0, 2.0, 3.0), Rgb::new(4.0, 5.0, 6.0)];
         assert_eq!(g.row_dot(0, &x), Rgb::new(2.0, 2.5, 3.0));
         let c = |v: f32, x: f64| f64::from(v) * x;

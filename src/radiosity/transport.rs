@@ -44,10 +44,10 @@ use super::bundles::operator;
 use super::coarse::coarse_operator;
 use super::gather::gather;
 use super::mesh::Mesh;
-use super::sparse::Sparse;
+use super::sparse::{Buf, Sparse};
 use super::MAX_RHO;
 use crate::math::rng::mix64;
-use crate::photometry::{ChannelValues, Rgb};
+use crate::photometry::Rgb;
 use crate::projection::ProjectionScene;
 use crate::scene::{Scene, Sensor};
 use crate::trace::Tracer;
@@ -55,6 +55,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Knobs of the global-line operator and its solve.
@@ -137,10 +138,67 @@ pub(super) struct Part {
     pub(super) g_coarse: Sparse,
 }
 
-/// One sparse matrix as flat arrays: row offsets, columns, values (one per column when
-/// the matrix is grey, else three: R, G, B).
-pub type SparseArrays = (Vec<u32>, Vec<u32>, Vec<f32>);
-/// Borrowed [`SparseArrays`].
+impl Part {
+    /// Its four matrices: operator and gather, fine then coarse.
+    pub(super) fn matrices(&self) -> [&Sparse; 4] {
+        [&self.f, &self.g, &self.f_coarse, &self.g_coarse]
+    }
+}
+
+/// One independent part of an operator as built or read ([`Transport::build_part`],
+/// [`Transport::import_part`]): what a cache stores and reads on its own.
+#[derive(Debug)]
+pub struct TransportPart {
+    part: Part,
+    lines: u64,
+}
+
+impl TransportPart {
+    /// Its four matrices as flat arrays ([`Transport::export`]'s entry for one part).
+    pub fn export(&self) -> [SparseSlices<'_>; 4] {
+        export_part(&self.part)
+    }
+
+    /// Lines counted (pixels × fragment crossings).
+    pub fn lines(&self) -> u64 {
+        self.lines
+    }
+
+    /// Gives back the pages of its arrays read in place from a record
+    /// ([`Transport::release_pages`]).
+    pub fn release_pages(&self) {
+        release_parts(std::slice::from_ref(&self.part));
+    }
+}
+
+fn export_part(p: &Part) -> [SparseSlices<'_>; 4] {
+    p.matrices()
+        .map(|m| (&m.offsets[..], &m.cols[..], &m.vals[..]))
+}
+
+/// Gives back the pages of `parts`' arrays read in place, each record once.
+fn release_parts(parts: &[Part]) {
+    let mut seen: Vec<*const crate::cache::MappedRecord> = Vec::new();
+    for p in parts {
+        for m in p.matrices() {
+            for r in [m.offsets.record(), m.cols.record()]
+                .into_iter()
+                .chain([m.vals.record()])
+                .flatten()
+            {
+                if !seen.contains(&Arc::as_ptr(r)) {
+                    seen.push(Arc::as_ptr(r));
+                    r.release();
+                }
+            }
+        }
+    }
+}
+
+/// One stored sparse matrix's arrays: row offsets, columns, values (one per column when
+/// the matrix is grey, else three: R, G, B), held or read in place from a record.
+pub type SparseBufs = (Buf<u32>, Buf<u32>, Buf<f32>);
+/// Borrowed [`SparseBufs`].
 pub type SparseSlices<'a> = (&'a [u32], &'a [u32], &'a [f32]);
 
 /// Counters of an operator build.
@@ -169,6 +227,8 @@ pub struct Transport {
     pub(super) emit: Vec<Rgb>,
     pub(super) coarse_rho: Vec<Rgb>,
     pub(super) coarse_area: Vec<f64>,
+    /// Sensors the gather reads.
+    sensor_count: usize,
     /// Parameters used.
     pub params: TransportParams,
     /// Build counters.
@@ -222,6 +282,7 @@ impl Transport {
             emit,
             coarse_rho,
             coarse_area,
+            sensor_count: sensors.len(),
             params: *params,
             stats: TransportStats::default(),
         }
@@ -241,114 +302,121 @@ impl Transport {
         tracer: &Tracer,
     ) -> Transport {
         let t0 = Instant::now();
+        let mut t = Transport::shell(scene, sensors, params);
+        let parts: Vec<TransportPart> = (0..t.part_count())
+            .into_par_iter()
+            .map(|p| t.build_part(scene, sensors, tracer, p))
+            .collect();
+        t.set_parts(parts, t0.elapsed().as_secs_f64());
+        t
+    }
+
+    /// The operator's mesh and per-row materials for `scene`, `sensors` and `params`,
+    /// without its parts: what [`Transport::build_part`] and [`Transport::import_part`]
+    /// make parts for, and [`Transport::set_parts`] completes.
+    pub fn shell(scene: &Scene, sensors: &[Sensor], params: &TransportParams) -> Transport {
         let mut t = Transport::setup(scene, sensors, params);
+        t.sensor_count = sensors.len();
+        t.stats.rows = t.rows();
+        t
+    }
+
+    /// Number of independent parts (`params.parts`, at least 2).
+    pub fn part_count(&self) -> usize {
+        self.params.parts.max(2) as usize
+    }
+
+    /// Estimates part `p` on this operator's mesh (its own seed: the same part whether
+    /// built alone or beside the others): the line operator and the gather of `sensors`,
+    /// each at the fine and the coarse level.
+    pub fn build_part(
+        &self,
+        scene: &Scene,
+        sensors: &[Sensor],
+        tracer: &Tracer,
+        p: usize,
+    ) -> TransportPart {
+        let params = &self.params;
         let parts_n = params.parts.max(2);
-        let mesh = &t.mesh;
+        let mesh = &self.mesh;
         let pscene = ProjectionScene::new(scene);
         let per = params.directions.div_ceil(parts_n).max(1);
         let gather_per = (params.gather_rays / parts_n).max(16);
-        let mut stats = TransportStats {
-            rows: mesh.elements.len(),
-            ..TransportStats::default()
-        };
-        let built: Vec<(Part, u64)> = (0..parts_n)
-            .into_par_iter()
-            .map(|p| {
-                let seed = mix64(params.seed ^ mix64(p as u64 + 1));
-                let (f, lines) = operator(&pscene, tracer, mesh, per, params.resolution, seed);
-                let g = gather(tracer, mesh, sensors, gather_per, seed);
-                let f_coarse = coarse_operator(&f, mesh);
-                let g_coarse = g.map_cols(&mesh.coarse_of);
-                (
-                    Part {
-                        f,
-                        g,
-                        f_coarse,
-                        g_coarse,
-                    },
-                    lines,
-                )
-            })
-            .collect();
-        let mut parts = Vec::new();
-        for (p, lines) in built {
-            stats.lines += lines;
-            stats.links += p.f.cols.len() as u64;
-            parts.push(p);
+        let seed = mix64(params.seed ^ mix64(p as u64 + 1));
+        let (f, lines) = operator(&pscene, tracer, mesh, per, params.resolution, seed);
+        let g = gather(tracer, mesh, sensors, gather_per, seed);
+        let f_coarse = coarse_operator(&f, mesh);
+        let g_coarse = g.map_cols(&mesh.coarse_of);
+        TransportPart {
+            part: Part {
+                f,
+                g,
+                f_coarse,
+                g_coarse,
+            },
+            lines,
         }
-        stats.sensor_rays = gather_per as u64 * sensors.len() as u64 * parts_n as u64;
-        stats.seconds = t0.elapsed().as_secs_f64();
-        t.parts = parts;
-        t.stats = stats;
-        t
+    }
+
+    /// Completes the operator with its parts, in part order, and the build's wall time
+    /// (s) for its counters.
+    pub fn set_parts(&mut self, parts: Vec<TransportPart>, seconds: f64) {
+        let parts_n = self.part_count() as u64;
+        let gather_per = (self.params.gather_rays as u64 / parts_n).max(16);
+        self.stats = TransportStats {
+            rows: self.rows(),
+            lines: parts.iter().map(|p| p.lines).sum(),
+            links: parts.iter().map(|p| p.part.f.cols.len() as u64).sum(),
+            sensor_rays: gather_per * self.sensor_count as u64 * parts_n,
+            seconds,
+        };
+        self.parts = parts.into_iter().map(|p| p.part).collect();
     }
 
     /// The operator as flat arrays, for storage: per part, four sparse matrices (fine
     /// operator, fine gather, coarse operator, coarse gather), each as (row offsets,
     /// columns, values: one per column when grey, else R, G, B).
     pub fn export(&self) -> Vec<[SparseSlices<'_>; 4]> {
-        self.parts
-            .iter()
-            .map(|p| {
-                [&p.f, &p.g, &p.f_coarse, &p.g_coarse]
-                    .map(|m| (&m.offsets[..], &m.cols[..], m.vals.as_slice()))
-            })
-            .collect()
+        self.parts.iter().map(export_part).collect()
     }
 
-    /// Rebuilds an operator from [`Transport::export`]ed arrays for the same scene, sensors
-    /// and parameters; `None` when the arrays do not fit (wrong sizes or indices), so a
-    /// stale or foreign record is never used.
-    pub fn import(
-        scene: &Scene,
-        sensors: &[Sensor],
-        params: &TransportParams,
-        parts: &[[SparseArrays; 4]],
-        stats: TransportStats,
-    ) -> Option<Transport> {
-        let mut t = Transport::setup(scene, sensors, params);
-        if parts.len() != params.parts.max(2) as usize {
-            return None;
-        }
-        let rows = t.mesh.elements.len();
-        let coarse = t.mesh.coarse_rows;
+    /// A part from [`TransportPart::export`]ed arrays (held, or read in place from the
+    /// record they were stored in) for this operator's mesh and sensors, with its line
+    /// count; `None` when the arrays do not fit (wrong sizes or indices), so a stale or
+    /// foreign record is never used.
+    pub fn import_part(&self, arrays: [SparseBufs; 4], lines: u64) -> Option<TransportPart> {
+        let rows = self.rows();
+        let coarse = self.mesh.coarse_rows;
+        let sensors = self.sensor_count;
         // (rows, columns) of each matrix.
         let shape = [
             (rows, rows),
-            (sensors.len(), rows),
+            (sensors, rows),
             (coarse, coarse),
-            (sensors.len(), coarse),
+            (sensors, coarse),
         ];
-        for p in parts {
-            let mut m = p.iter().zip(shape).map(|((o, c, v), (nr, nc))| {
-                // Grey matrices hold one value per column, others three.
-                let vals = ChannelValues::from_raw(v.clone(), c.len())?;
-                let ok = o.len() == nr + 1
-                    && o.first() == Some(&0)
-                    && o.windows(2).all(|w| w[0] <= w[1])
-                    && *o.last().unwrap_or(&1) as usize == c.len()
-                    && c.iter().all(|&j| (j as usize) < nc)
-                    && v.iter().all(|x| x.is_finite());
-                ok.then(|| Sparse {
-                    offsets: o.clone(),
-                    cols: c.clone(),
-                    vals,
-                })
-            });
-            let (f, g, f_coarse, g_coarse) = (m.next()??, m.next()??, m.next()??, m.next()??);
-            t.parts.push(Part {
+        let mut m = arrays
+            .into_iter()
+            .zip(shape)
+            .map(|((o, c, v), s)| Sparse::from_parts(o, c, v, s));
+        let (f, g, f_coarse, g_coarse) = (m.next()??, m.next()??, m.next()??, m.next()??);
+        Some(TransportPart {
+            part: Part {
                 f,
                 g,
                 f_coarse,
                 g_coarse,
-            });
-        }
-        t.stats = TransportStats {
-            rows,
-            seconds: 0.0,
-            ..stats
-        };
-        Some(t)
+            },
+            lines,
+        })
+    }
+
+    /// Gives the pages of the arrays read in place from a cache record back to the kernel
+    /// ([`crate::cache::MappedRecord::release`]): a stage calls it when done with a part,
+    /// so that the operator is not resident as a whole. Values are unchanged; held
+    /// arrays are untouched.
+    pub fn release_pages(&self) {
+        release_parts(&self.parts);
     }
 
     /// Number of mesh rows (unknowns).
