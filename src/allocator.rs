@@ -31,6 +31,25 @@ pub fn keep_freed_memory() {
     drop(block);
 }
 
+/// Hands the memory the allocator holds free back to the kernel (glibc `malloc_trim`),
+/// between stages: a stage's freed blocks below the mapping threshold stay in the heap
+/// otherwise, counted in the resident memory of every later stage. Elsewhere than glibc,
+/// nothing. Results never depend on it.
+pub fn give_back_freed() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    trim();
+}
+
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+#[allow(unsafe_code)]
+fn trim() {
+    // SAFETY: `malloc_trim` takes no pointers and only returns free pages of glibc's own
+    // heaps to the kernel; it is safe to call from any thread at any time.
+    unsafe {
+        libc::malloc_trim(0);
+    }
+}
+
 #[cfg(all(test, target_os = "linux", target_env = "gnu"))]
 mod tests {
     /// Minor page faults of the calling thread so far.

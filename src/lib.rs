@@ -35,7 +35,7 @@
 //! transfer, cache, trace · L6 sensors, radiosity · L7 metrics, export, render (export may
 //! use metrics) · L8 sequence · L9 cli.
 #![warn(missing_docs)]
-#![deny(unsafe_code)] // exceptions: cache::store::map_readonly, cache::record::release_map, the AVX2 dispatch of sequence::coefficient_sums and radiosity::response, and math::bvh's traversal (its AVX2 dispatch and uninitialised stack)
+#![deny(unsafe_code)] // exceptions: cache::store::map_readonly, cache::record::release_map, allocator::trim, the AVX2 dispatch of sequence::coefficient_sums and radiosity::response, and math::bvh's traversal (its AVX2 dispatch and uninitialised stack)
 
 // Modules in pipeline order (rustfmt.toml keeps this order).
 

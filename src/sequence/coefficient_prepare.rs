@@ -207,6 +207,9 @@ impl Coefficients {
             }
             stats.spilled_bytes = spill.bytes;
             drop(spill);
+            // The blocks' responses and the batches' projections are freed: handed back
+            // before the deep nodes' direct rows are made.
+            crate::allocator::give_back_freed();
             for (&i, nd) in todo.iter().zip(fresh) {
                 let src = &list[i];
                 if let Some(key) = record_key(hash, dirs, src, res_of(src)) {

@@ -14,7 +14,6 @@ use crate::radiosity::transport::{SparseBufs, TransportPart};
 use crate::radiosity::{Buf, Transport, TransportParams};
 use crate::scene::Scene;
 use crate::trace::Tracer;
-use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -66,34 +65,36 @@ pub fn transport(
     let k = key(scene, params);
     let mut t = Transport::shell(scene, &scene.sensors, params);
     let shell = &t;
-    let parts: Vec<(TransportPart, bool)> = (0..t.part_count())
-        .into_par_iter()
-        .map(|p| {
-            let key = part_key(&k, p);
-            if let Some(part) = store.get(&key).and_then(|r| decode(shell, r)) {
-                return (part, true);
-            }
-            let built = shell.build_part(scene, &scene.sensors, tracer, p);
-            if !store.is_enabled() {
-                return (built, false);
-            }
-            let failures = store.stats().write_failures;
-            let lines = [built.lines() as f64];
-            store.put_sections(&key, &sections(&lines, &built.export()));
-            if store.stats().write_failures != failures {
-                return (built, false);
-            }
-            // Read back in place, the same arrays: the built copy is freed first (else
-            // both are resident while the record is validated).
-            drop(built);
-            match store.read_back(&key).and_then(|r| decode(shell, r)) {
-                Some(part) => (part, false),
-                // Gone already (evicted by a cache smaller than the operator, or removed
-                // by another process): built again, the same part, and held.
-                None => (shell.build_part(scene, &scene.sensors, tracer, p), false),
-            }
-        })
-        .collect();
+    let one = |p: usize| -> (TransportPart, bool) {
+        let key = part_key(&k, p);
+        if let Some(part) = store.get(&key).and_then(|r| decode(shell, r)) {
+            return (part, true);
+        }
+        let built = shell.build_part(scene, &scene.sensors, tracer, p);
+        if !store.is_enabled() {
+            return (built, false);
+        }
+        let failures = store.stats().write_failures;
+        let lines = [built.lines() as f64];
+        store.put_sections(&key, &sections(&lines, &built.export()));
+        if store.stats().write_failures != failures {
+            return (built, false);
+        }
+        // Read back in place, the same arrays: the built copy is freed first (else
+        // both are resident while the record is validated).
+        drop(built);
+        match store.read_back(&key).and_then(|r| decode(shell, r)) {
+            Some(part) => (part, false),
+            // Gone already (evicted by a cache smaller than the operator, or removed
+            // by another process): built again, the same part, and held.
+            None => (shell.build_part(scene, &scene.sensors, tracer, p), false),
+        }
+    };
+    // One part at a time, each with every thread on its lines: two parts side by side
+    // each held their line lists (the build's largest holding) at once. Building-10k:
+    // the build's peak 406–449 → 268 MB, its time the same (16.6 s against 15.7–18.4).
+    // Parts are independent: the same whatever the order.
+    let parts: Vec<(TransportPart, bool)> = (0..t.part_count()).map(one).collect();
     let cached = parts.iter().all(|p| p.1);
     let seconds = if cached {
         0.0

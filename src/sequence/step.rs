@@ -204,6 +204,8 @@ impl<'a> Engine<'a> {
                     super::operator::transport(scene, &params, store, tracer)
                 })
             });
+            // The build's line lists are freed; the coefficients' blocks come next.
+            crate::allocator::give_back_freed();
             *from_cache = cached;
             t
         };
@@ -219,8 +221,10 @@ impl<'a> Engine<'a> {
             )
         })?;
         // The steps sum coefficients and never read the operator again: it is the run's
-        // largest holding (about half a gigabyte on the generated building), so it goes.
+        // largest holding (about half a gigabyte on the generated building), so it goes,
+        // with what the coefficients' solves freed.
         self.operator = None;
+        crate::allocator::give_back_freed();
         self.operator_deferred = true;
         self.setup.add("daylight_coefficients", c.stats.seconds);
         let mut memo = self.skies.lock().expect("sky memo");
