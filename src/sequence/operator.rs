@@ -192,5 +192,20 @@ mod tests {
         let (warm, cached) = transport(&scene, &params, &store, &tracer);
         assert!(cached);
         assert_eq!(solve(&warm), want);
+        // A build cut short: the parts it stored are read, the missing one built again.
+        let gone = folder
+            .path()
+            .join(part_key(&key(&scene, &params), 1).file_name());
+        std::fs::remove_file(&gone).unwrap();
+        let before = store.stats();
+        let (again, cached) = transport(&scene, &params, &store, &tracer);
+        let after = store.stats();
+        assert!(!cached);
+        assert_eq!(
+            (after.hits - before.hits, after.writes - before.writes),
+            (held.part_count() as u64 - 1, 1),
+            "the other parts read, the missing one built and stored"
+        );
+        assert_eq!(solve(&again), want);
     }
 }
