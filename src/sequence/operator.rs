@@ -4,7 +4,7 @@
 //! site or weather, so those changes reuse it.
 //!
 //! Each independent part is a record of its own, stored as soon as it is built and then
-//! read back in place (memory-mapped): a cold build never holds more than the parts in
+//! read back in place (memory-mapped): a cold build never holds more than the part in
 //! progress, the stages after it keep only the part they read resident
 //! ([`Transport::release_pages`]), and a build cut short keeps the parts it finished.
 
