@@ -591,7 +591,13 @@ impl MappedRecord {
     }
 }
 
+/// `MADV_DONTNEED` on a read-only file map ([`MappedRecord::release`]); elsewhere than
+/// Unix, nothing (the pages stay resident).
+#[cfg(not(unix))]
+fn release_map(_map: &memmap2::Mmap) {}
+
 /// `MADV_DONTNEED` on a read-only file map ([`MappedRecord::release`]).
+#[cfg(unix)]
 #[allow(unsafe_code)]
 fn release_map(map: &memmap2::Mmap) {
     // SAFETY: `unchecked_advise` is unsafe because `MADV_DONTNEED` discards a private
