@@ -346,20 +346,25 @@ impl Store {
 
     /// As [`Self::put`] for a record given as its sections, written to the file as they
     /// lie ([`super::record::write_record`]) rather than encoded in memory first: what a
-    /// record of hundreds of megabytes (the interreflection operator) needs.
-    pub fn put_sections(&self, key: &RecordKey, sections: &[super::record::Section<'_>]) {
+    /// record of hundreds of megabytes (the interreflection operator) needs. Returns
+    /// whether the record was written (a failure is counted and warned of, as by `put`).
+    pub fn put_sections(&self, key: &RecordKey, sections: &[super::record::Section<'_>]) -> bool {
         self.put_with(key, |f| {
             let mut w = std::io::BufWriter::with_capacity(1 << 20, f);
             let n = super::record::write_record(&mut w, key, sections)?;
             w.flush()?;
             Ok(n)
-        });
+        })
     }
 
     /// Writes a record through `write` (which returns the bytes it wrote) to a temporary
-    /// file, then renames it into place.
-    fn put_with(&self, key: &RecordKey, write: impl FnOnce(&mut fs::File) -> std::io::Result<u64>) {
-        let Some(dir) = &self.dir else { return };
+    /// file, then renames it into place; whether it did.
+    fn put_with(
+        &self,
+        key: &RecordKey,
+        write: impl FnOnce(&mut fs::File) -> std::io::Result<u64>,
+    ) -> bool {
+        let Some(dir) = &self.dir else { return false };
         let name = key.file_name();
         let tmp = dir.join(self.temp_name(&name));
         let result = (|| {
@@ -378,6 +383,7 @@ impl Store {
                 if self.tracked_bytes.fetch_add(n, Relaxed) + n > self.max_bytes {
                     self.evict();
                 }
+                true
             }
             Err(e) => {
                 let _ = fs::remove_file(&tmp);
@@ -385,6 +391,7 @@ impl Store {
                 self.warn_once(&self.warned_write, || {
                     format!("cache: cannot write {}: {e}", dir.join(&name).display())
                 });
+                false
             }
         }
     }

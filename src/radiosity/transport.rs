@@ -316,7 +316,6 @@ impl Transport {
     /// make parts for, and [`Transport::set_parts`] completes.
     pub fn shell(scene: &Scene, sensors: &[Sensor], params: &TransportParams) -> Transport {
         let mut t = Transport::setup(scene, sensors, params);
-        t.sensor_count = sensors.len();
         t.stats.rows = t.rows();
         t
     }

@@ -74,10 +74,8 @@ pub fn transport(
         if !store.is_enabled() {
             return (built, false);
         }
-        let failures = store.stats().write_failures;
         let lines = [built.lines() as f64];
-        store.put_sections(&key, &sections(&lines, &built.export()));
-        if store.stats().write_failures != failures {
+        if !store.put_sections(&key, &sections(&lines, &built.export())) {
             return (built, false);
         }
         // Read back in place, the same arrays: the built copy is freed first (else
