@@ -103,6 +103,55 @@ fn a_capped_year_stops_before_the_work_or_writes_the_uncapped_bytes() {
     assert_eq!(free.memory.max_memory_bytes, 0);
 }
 
+/// Under a cap the user gives, the daylight coefficients are read in place from the cache
+/// (mapped, their pages given back every few days); the outputs, cold and warm, are the
+/// bytes of a run that holds them.
+#[test]
+fn coefficients_read_in_place_give_the_bytes_of_coefficients_held() {
+    let d = tempfile::tempdir().unwrap();
+    let scene = half_office(d.path());
+    let weather =
+        read_weather(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office/weather.epw"))
+            .unwrap();
+    let q = Quality::preset("draft").unwrap();
+    let go = AtomicBool::new(false);
+    let control = RunControl {
+        stop: &go,
+        progress: &|_, _| {},
+        coefficient_progress: &|_, _| {},
+    };
+    // Three weeks: the pages are given back more than once.
+    let run = |name: &str, cache: &str, cap: Option<MemoryCap>| {
+        let o = AnnualOptions {
+            start: chrono::NaiveDate::from_ymd_opt(2021, 3, 1),
+            end: chrono::NaiveDate::from_ymd_opt(2021, 3, 21),
+            max_memory: cap,
+            ..AnnualOptions::default()
+        };
+        let store = Store::open(&d.path().join(cache), daystep::cache::DEFAULT_MAX_BYTES);
+        let out = d.path().join(name);
+        let r = run_annual(&scene, &weather, &q, &store, &out, &o, &control).unwrap();
+        (r.coefficients.expect("daylight coefficients"), out)
+    };
+    let cap = || Some(MemoryCap::parse("8G").unwrap());
+    let (held, held_out) = run("held", "cache-held", None);
+    assert!(!held.in_place, "a few megabytes of coefficients are held");
+    for (name, computed) in [("cold", true), ("warm", false)] {
+        let (c, out) = run(name, "cache-mapped", cap());
+        assert!(
+            c.in_place,
+            "{name}: under a given cap they are read in place"
+        );
+        assert_eq!(c.computed > 0, computed, "{name}");
+        for f in ["illuminance.csv", "direct_sun.csv", "metrics.csv"] {
+            assert!(
+                std::fs::read(out.join(f)).unwrap() == std::fs::read(held_out.join(f)).unwrap(),
+                "{name}: {f} differs when the coefficients are read in place"
+            );
+        }
+    }
+}
+
 #[test]
 fn the_binary_reads_the_cap_refuses_a_bad_one_and_reports_it() {
     let d = tempfile::tempdir().unwrap();

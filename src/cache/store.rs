@@ -236,7 +236,15 @@ impl Store {
     /// in `rebuilds` and named in a warning (the first one per store; later ones are
     /// summarised). A hit marks the file as recently used for eviction. Never panics.
     pub fn get(&self, key: &RecordKey) -> Option<MappedRecord> {
-        self.read(key, true)
+        self.read(key, true, false)
+    }
+
+    /// As [`Self::get`], but memory-mapped whatever its size: for records a run keeps
+    /// until it ends and reads now and then (a year's daylight coefficients, a hundred
+    /// kilobytes each), whose pages can then go back to the kernel between reads
+    /// ([`MappedRecord::release`]).
+    pub fn get_mapped(&self, key: &RecordKey) -> Option<MappedRecord> {
+        self.read(key, true, true)
     }
 
     /// The record this store has just written for `key` ([`Self::put`]), read back
@@ -244,10 +252,15 @@ impl Store {
     /// validated as [`Self::get`] does, but counted neither as a hit nor as a miss: a cold
     /// run's counters stay all misses. `None` when it is gone or invalid.
     pub fn read_back(&self, key: &RecordKey) -> Option<MappedRecord> {
-        self.read(key, false)
+        self.read(key, false, false)
     }
 
-    fn read(&self, key: &RecordKey, count: bool) -> Option<MappedRecord> {
+    /// As [`Self::read_back`], mapped whatever its size ([`Self::get_mapped`]).
+    pub fn read_back_mapped(&self, key: &RecordKey) -> Option<MappedRecord> {
+        self.read(key, false, true)
+    }
+
+    fn read(&self, key: &RecordKey, count: bool, map_small: bool) -> Option<MappedRecord> {
         let miss = || {
             if count {
                 self.misses.fetch_add(1, Relaxed);
@@ -285,7 +298,7 @@ impl Store {
                 },
             );
         }
-        let record = if len <= READ_MAX_BYTES {
+        let record = if len <= READ_MAX_BYTES && !map_small {
             MappedRecord::read_from(&mut file, len as usize, key)
         } else {
             let map = match map_readonly(&file) {

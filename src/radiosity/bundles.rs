@@ -74,53 +74,49 @@ pub(super) fn operator(
             })
             .collect()
     };
-    // Each direction: (pair key, fixed-point τ) sorted and merged, plus line counts,
-    // folded per worker into one list that is merged again whenever it has doubled: the
-    // pairs of many directions repeat, and holding every direction's list at once took
-    // most of a large scene's memory. Fixed-point sums are exact, so the grouping does
-    // not change a bit of the result.
-    type Acc = (Links, Vec<u64>, usize);
-    let fresh = || -> Acc { (Links::default(), vec![0u64; rows], 0) };
-    let (all, n, _) = (0..n_dirs)
-        .into_par_iter()
-        .fold(fresh, |(mut acc, mut n, mut merged), m| {
-            let d = bundle_direction(m, n_dirs, seed);
-            let jitter = glam::DVec2::new(
-                uniform(seed, 13, 2 * m as u64),
-                uniform(seed, 13, 2 * m as u64 + 1),
-            );
-            let mut pairs = Links::default();
-            let mut counts = vec![0u32; rows];
-            let pass_factor: Vec<Rgb> = (0..pscene.vertices.len())
-                .map(|t| pscene.pass_factor(t, d))
-                .collect();
-            for pass in &passes {
-                let line = Line {
-                    d,
-                    jitter,
-                    pass_factor: &pass_factor,
-                };
-                bundle(pscene, tracer, mesh, pass, &line, &mut pairs, &mut counts);
-            }
+    // Each direction's links (pair key, fixed-point τ), sorted and merged by the worker
+    // that made them, are summed into one [`Accumulator`] a few directions at a time, with
+    // the line counts. The pairs of many directions repeat; one list per worker, each
+    // merged when it had doubled, held four to five times the operator's links at once,
+    // the largest holding of a cold run. Fixed-point sums are exact, so neither the
+    // grouping nor the order changes a bit of the result.
+    let mut acc = Accumulator::default();
+    let mut n = vec![0u64; rows];
+    let in_flight = 2 * rayon::current_num_threads().max(1);
+    let all_dirs: Vec<u32> = (0..n_dirs).collect();
+    for chunk in all_dirs.chunks(in_flight) {
+        let done: Vec<(Links, Vec<u32>)> = chunk
+            .par_iter()
+            .map(|&m| {
+                let d = bundle_direction(m, n_dirs, seed);
+                let jitter = glam::DVec2::new(
+                    uniform(seed, 13, 2 * m as u64),
+                    uniform(seed, 13, 2 * m as u64 + 1),
+                );
+                let mut pairs = Links::default();
+                let mut counts = vec![0u32; rows];
+                let pass_factor: Vec<Rgb> = (0..pscene.vertices.len())
+                    .map(|t| pscene.pass_factor(t, d))
+                    .collect();
+                for pass in &passes {
+                    let line = Line {
+                        d,
+                        jitter,
+                        pass_factor: &pass_factor,
+                    };
+                    bundle(pscene, tracer, mesh, pass, &line, &mut pairs, &mut counts);
+                }
+                (pairs.merged(), counts)
+            })
+            .collect();
+        for (pairs, counts) in done {
             for (t, c) in n.iter_mut().zip(counts) {
                 *t += c as u64;
             }
-            acc.extend(pairs.merged());
-            if acc.len() > 2 * merged.max(1 << 16) {
-                acc = acc.merged();
-                merged = acc.len();
-            }
-            (acc, n, merged)
-        })
-        .reduce(fresh, |(mut a, mut na, _), (b, nb, _)| {
-            a.extend(b);
-            for (x, y) in na.iter_mut().zip(nb) {
-                *x += y;
-            }
-            let a = a.merged();
-            let len = a.len();
-            (a, na, len)
-        });
+            acc.add(pairs);
+        }
+    }
+    let all = acc.finish();
     let lines: u64 = n.iter().sum();
     let entries = all.into_sorted().map(|(k, q)| {
         let (r, c) = ((k >> 32) as u32, k as u32);
@@ -377,9 +373,90 @@ impl Links {
     }
 }
 
+/// Links summed over many directions in bounded memory: one sorted list with one entry
+/// per key, and the directions' lists pending beside it, sorted and merged into it (in
+/// place, from its end) once they reach a quarter of it. Held at most: the links' sum and
+/// half as much again, where lists merged when they had doubled held twice the sum and
+/// more.
+#[derive(Default)]
+struct Accumulator {
+    merged: Links,
+    pending: Links,
+}
+
+impl Accumulator {
+    /// Entries pending below which no merge is made, whatever the sum's size.
+    const MIN_PENDING: usize = 1 << 20;
+
+    fn add(&mut self, links: Links) {
+        self.pending.extend(links);
+        if self.pending.len() > (self.merged.len() / 4).max(Self::MIN_PENDING) {
+            self.flush();
+        }
+    }
+
+    fn flush(&mut self) {
+        let p = std::mem::take(&mut self.pending).merged();
+        let m = &mut self.merged;
+        m.grey = merge_sorted(std::mem::take(&mut m.grey), p.grey, |a, b| *a += b);
+        m.colour = merge_sorted(std::mem::take(&mut m.colour), p.colour, |a, b| {
+            for (x, y) in a.iter_mut().zip(b) {
+                *x += y;
+            }
+        });
+    }
+
+    /// The sum: each list sorted by key, one entry per key.
+    fn finish(mut self) -> Links {
+        self.flush();
+        self.merged
+    }
+}
+
+/// Two lists, each sorted by key with one entry per key, as one such list with equal
+/// keys' values summed (by `add`): written into `a` from its end, so nothing but `a`
+/// grows.
+fn merge_sorted<V: Copy>(
+    mut a: Vec<(u64, V)>,
+    b: Vec<(u64, V)>,
+    add: impl Fn(&mut V, V),
+) -> Vec<(u64, V)> {
+    let Some(&fill) = b.first() else {
+        return a;
+    };
+    let (na, nb) = (a.len(), b.len());
+    a.resize(na + nb, fill);
+    let (mut i, mut j, mut w) = (na, nb, na + nb);
+    // The write index never passes an unread entry of `a`: w − i is what of `b` is left
+    // plus the keys merged, at least 0.
+    while j > 0 {
+        w -= 1;
+        let y = b[j - 1];
+        if i > 0 && a[i - 1].0 > y.0 {
+            a[w] = a[i - 1];
+            i -= 1;
+        } else if i > 0 && a[i - 1].0 == y.0 {
+            let mut x = a[i - 1];
+            add(&mut x.1, y.1);
+            a[w] = x;
+            i -= 1;
+            j -= 1;
+        } else {
+            a[w] = y;
+            j -= 1;
+        }
+    }
+    // Keys merged left a gap of w − i between a's untouched head and the merged tail.
+    if w > i {
+        a.copy_within(w.., i);
+        a.truncate(a.len() - (w - i));
+    }
+    a
+}
+
 /// `v` sorted by key with equal keys' values summed (by `add`), in place.
-fn merge_pairs<V: Copy>(mut v: Vec<(u64, V)>, add: impl Fn(&mut V, V)) -> Vec<(u64, V)> {
-    v.sort_unstable_by_key(|e| e.0);
+fn merge_pairs<V: Copy + Send>(mut v: Vec<(u64, V)>, add: impl Fn(&mut V, V)) -> Vec<(u64, V)> {
+    v.par_sort_unstable_by_key(|e| e.0);
     let mut w = 0;
     for i in 0..v.len() {
         if w > 0 && v[w - 1].0 == v[i].0 {
@@ -431,5 +508,46 @@ mod tests {
         let got: Vec<(u64, [u64; 3])> = all.into_sorted().collect();
         let want: Vec<(u64, [u64; 3])> = want.into_iter().collect();
         assert_eq!(got, want);
+    }
+
+    /// The accumulator's sums equal a plain map's, whether its merges come after every
+    /// list, every few, or only at the end, with keys before, between and after those
+    /// already merged, and empty lists among them.
+    #[test]
+    fn the_accumulator_sums_per_key_whenever_it_merges() {
+        for every in [1, 3, 1000] {
+            let mut want: BTreeMap<u64, [u64; 3]> = BTreeMap::new();
+            let mut acc = Accumulator::default();
+            for list in 0..200u64 {
+                let mut links = Links::default();
+                for i in 0..(list % 7) * 5 {
+                    let h = mix64(list << 20 | i);
+                    // Few keys, so lists repeat them; the range widens as lists go on.
+                    let key = ((h % (3 + list / 10)) << 32) | ((h >> 24) % 13);
+                    let g = (h >> 40) % 1000;
+                    let q = if h % 4 == 0 { [g, g + 3, 1] } else { [g; 3] };
+                    let w = want.entry(key).or_default();
+                    for (a, b) in w.iter_mut().zip(q) {
+                        *a += b;
+                    }
+                    links.push(key, q);
+                }
+                acc.add(links.merged());
+                if list % every == 0 {
+                    acc.flush();
+                    let grey: Vec<u64> = acc.merged.grey.iter().map(|e| e.0).collect();
+                    let colour: Vec<u64> = acc.merged.colour.iter().map(|e| e.0).collect();
+                    for l in [grey, colour] {
+                        assert!(
+                            l.windows(2).all(|w| w[0] < w[1]),
+                            "sorted, one entry per key"
+                        );
+                    }
+                }
+            }
+            let got: Vec<(u64, [u64; 3])> = acc.finish().into_sorted().collect();
+            let want: Vec<(u64, [u64; 3])> = want.into_iter().collect();
+            assert_eq!(got, want, "merging every {every} lists");
+        }
     }
 }

@@ -144,6 +144,15 @@ impl Transport {
         ((max_bytes / per) as usize / BLOCK * BLOCK).max(BLOCK)
     }
 
+    /// The sensors per block for `sensors` sensors in blocks of at most `most` (a
+    /// multiple of [`BLOCK`]): as many blocks as `most` needs, evened out, each a multiple
+    /// of [`BLOCK`]. Blocks of 160 and 2 sensors held the first's responses through the
+    /// second's solves; two of 96 hold a little over half as much, in the same time.
+    pub fn balanced_block(sensors: usize, most: usize) -> usize {
+        let blocks = sensors.div_ceil(most.max(1)).max(1);
+        (sensors.div_ceil(blocks).div_ceil(BLOCK) * BLOCK).clamp(BLOCK, most.max(BLOCK))
+    }
+
     /// Solves the adjoint systems of the sensors `sensors` (all parts, both levels), in
     /// sub-blocks of [`BLOCK`] sensors counted from sensor 0, so the values do not depend on
     /// how a caller blocks them.
@@ -442,7 +451,30 @@ impl Transport {
 
 #[cfg(test)]
 mod tests {
+    use super::super::response::BLOCK;
+    use super::super::Transport;
     use super::DirectionTerms;
+
+    /// Balanced blocks are whole sub-blocks, no larger than asked and no more of them.
+    #[test]
+    fn balanced_blocks_even_out_within_the_most() {
+        assert_eq!(
+            Transport::balanced_block(162, 160),
+            96,
+            "160 + 2 became 96 + 66"
+        );
+        assert_eq!(Transport::balanced_block(1620, 224), 224);
+        for k in (1..3000).step_by(7) {
+            for most in [BLOCK, 64, 160, 224, 1024] {
+                let b = Transport::balanced_block(k, most);
+                assert!(
+                    b % BLOCK == 0 && b <= most,
+                    "{k} sensors, at most {most}: {b}"
+                );
+                assert!(k.div_ceil(b) <= k.div_ceil(most), "{k}, {most}: {b}");
+            }
+        }
+    }
 
     fn bits(t: &DirectionTerms) -> Vec<u32> {
         let (fine, coarse) = &t.0;

@@ -30,6 +30,12 @@ pub enum Buf<T> {
     },
 }
 
+impl<T> From<Vec<T>> for Buf<T> {
+    fn from(v: Vec<T>) -> Self {
+        Buf::Owned(v)
+    }
+}
+
 impl<T> Default for Buf<T> {
     fn default() -> Self {
         Buf::Owned(Vec::new())

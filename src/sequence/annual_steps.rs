@@ -171,6 +171,9 @@ impl Ctx<'_> {
             _ => self.cut_day(day, &lit, key.as_ref())?,
         };
         let mut steps = self.engine.summed(cuts).into_iter();
+        // Now and then the coefficients read go back to the page cache: a year's steps
+        // would otherwise keep every node they met resident.
+        self.engine.coefficient_day_done();
         Ok(lit
             .into_iter()
             .map(|lit| match lit {

@@ -34,7 +34,7 @@ use super::directions::Directions;
 use super::estimate::SensorValue;
 use crate::cache::FIRST_USER_TAG;
 use crate::photometry::{from_lux, lux, Rgb};
-use crate::radiosity::TransportSensor;
+use crate::radiosity::{Buf, TransportSensor};
 use crate::sensors::SensorDirect;
 use crate::sources::{Source, SourceKey, SunGrid};
 use serde::Serialize;
@@ -56,19 +56,26 @@ const DIRECT_ROWS: usize = 9;
 /// ([`spill`]) rather than make them again. 128 MB of bfloat16 responses hold as many
 /// sensors as 256 MB did in f32.
 pub const RESPONSE_MAX_BYTES: u64 = 128 << 20;
+/// Days summed between two givings-back of the coefficients' pages
+/// ([`Coefficients::day_done`]). Neighbouring days use mostly the same nodes, so a
+/// fortnight holds little more than a day; given back after every day, the warm
+/// building year spent 10 s in the kernel (madvise and page faults) against 0.8 s.
+const RELEASE_DAYS: usize = 16;
 /// Directions whose source terms are held at once while coefficients are computed, and
 /// applied together ([`crate::radiosity::AdjointBlock::apply_many`]): a few megabytes of
 /// terms each on the generated building, and the block's responses read once per batch.
 const BATCH: usize = 64;
 
-/// One node's per-sensor data, rows of `sensors` f32 each.
+/// One node's per-sensor data, rows of `sensors` f32 each, held or read in place from
+/// its cache record ([`Buf`]: the steps then keep resident only what recent days read,
+/// [`Coefficients::release_pages`]).
 #[derive(Clone, Debug, Default)]
 struct NodeData {
     /// [`DIRECT_ROWS`] rows (empty for sun-grid vertices).
-    direct: Vec<f32>,
+    direct: Buf<f32>,
     /// parts rows of fine interreflected lux per W/m², then the coarse mean; shared by
     /// the nodes that take them from one ancestor ([`indirect_ancestors`]).
-    indirect: Arc<Vec<f32>>,
+    indirect: Arc<Buf<f32>>,
     /// For a node whose interreflected rows are an ancestor's, their stated error per
     /// sensor, lux per W/m² ([`indirect_ancestors`]); empty otherwise.
     direction_err: Vec<f32>,
@@ -88,6 +95,8 @@ mod sums;
 mod prepare;
 #[path = "terms_spill.rs"]
 mod spill;
+#[path = "coefficient_scratch.rs"]
+mod scratch;
 pub use budget::adjoint_budget;
 pub(super) use cut_batch::CutBatch;
 use prepare::record_key;
@@ -122,8 +131,12 @@ pub struct CoefficientStats {
     /// Bytes of source terms the first sensor block wrote to a scratch file for the later
     /// blocks to read (0: one block, or the file could not be used).
     pub spilled_bytes: u64,
-    /// Bytes the coefficients take in memory.
+    /// Bytes the coefficients take, held or read in place.
     pub bytes: u64,
+    /// Whether their rows are read in place from the cache's records (memory-mapped, their
+    /// pages given back every few days) rather than held: where they are large, or under
+    /// a cap the user set.
+    pub in_place: bool,
     /// Sun-grid spacing, degrees.
     pub sun_grid_deg: f64,
     /// Whether the interreflection operator had to be read or built (only when some
@@ -143,6 +156,10 @@ pub struct Coefficients {
     coarse: Mutex<HashMap<SourceKey, std::sync::Arc<Vec<f32>>, ahash::RandomState>>,
     /// The uniform ground's nodes summed, per ground cut.
     ground: ground_sum::GroundMemo,
+    /// The cache records the nodes' rows are read from in place, each once.
+    records: Vec<Arc<crate::cache::MappedRecord>>,
+    /// Days summed since the pages were last given back ([`Self::day_done`]).
+    days: std::sync::atomic::AtomicUsize,
     /// Preparation counters.
     pub stats: CoefficientStats,
 }
@@ -363,6 +380,25 @@ impl Coefficients {
         }
     }
 
+    /// Counts a day summed, and every [`RELEASE_DAYS`] days gives the pages read in
+    /// place back ([`Self::release_pages`]).
+    pub(super) fn day_done(&self) {
+        let n = self.days.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        if n % RELEASE_DAYS == 0 {
+            self.release_pages();
+        }
+    }
+
+    /// Gives the pages of the rows read in place back to the kernel: they come back from
+    /// the page cache when a later step reads them, so a year's steps keep resident what
+    /// the days since the last call read, not every node they have met. Values never
+    /// depend on it.
+    pub(super) fn release_pages(&self) {
+        for r in &self.records {
+            r.release();
+        }
+    }
+
     fn node(&self, src: &Source) -> &NodeData {
         self.nodes.get(&src.key).unwrap_or_else(|| {
             panic!(
@@ -376,9 +412,14 @@ impl Coefficients {
         if let Some(d) = self.coarse.lock().expect("coarse lock").get(&src.key) {
             return d.clone();
         }
-        // Only the sensor section of the record, kept here compactly (not also in `dirs`).
+        // Only the sensor section of the record, kept here compactly (not also in `dirs`),
+        // and of it only the children's rows, which are all the coarse sums read: the
+        // other five of the nine were half a warm year's growth in memory.
         let res = dirs.quality().projection.resolution_for(false);
-        let d = std::sync::Arc::new(direct_rows(&dirs.sensor_responses(src, res), self.sensors));
+        let mut rows = direct_rows(&dirs.sensor_responses(src, res), self.sensors);
+        rows.truncate(4 * self.sensors);
+        rows.shrink_to_fit();
+        let d = std::sync::Arc::new(rows);
         self.coarse
             .lock()
             .expect("coarse lock")

@@ -61,7 +61,8 @@ impl super::NodeData {
             Vec::new()
         } else {
             self.direct[..4 * k].to_vec()
-        };
+        }
+        .into();
         let mut mean = vec![0f32; k];
         for q in 0..parts {
             for (m, v) in mean.iter_mut().zip(&self.indirect[q * k..(q + 1) * k]) {
@@ -72,7 +73,7 @@ impl super::NodeData {
         mean.iter_mut().for_each(|m| *m *= inv);
         super::NodeData {
             direct,
-            indirect: std::sync::Arc::new(mean),
+            indirect: std::sync::Arc::new(mean.into()),
             direction_err: Vec::new(),
         }
     }

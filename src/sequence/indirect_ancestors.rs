@@ -29,6 +29,7 @@
 
 use super::{direct_rows, record_key, Directions, NodeData, DIRECT_ROWS, TAG_DIRECT};
 use crate::cache::{self, SceneHash, Section};
+use crate::radiosity::Buf;
 use crate::scene::Scene;
 use crate::sources::{node_source, SkyNodeKey, Source, SourceKey};
 use rayon::prelude::*;
@@ -98,7 +99,7 @@ pub(super) fn plan(list: &[Source], depth: u32) -> Plan {
 /// centres), times the angle from `a`'s centre to the node's.
 pub(super) fn inherit(
     node: &Source,
-    direct: Vec<f32>,
+    direct: Buf<f32>,
     a: (&Source, &NodeData),
     siblings: [(&Source, &NodeData); 3],
     parts: usize,
@@ -125,31 +126,48 @@ pub(super) fn inherit(
 }
 
 /// The direct rows of the `deep` nodes, in their order: from each node's coefficient
-/// record, or from sensor rays alone (no projection), then recorded. `res_of` gives a
-/// node's LDI resolution (part of its record's key).
+/// record, or from sensor rays alone (no projection), then recorded; read in place from
+/// the record either way where the cache holds it (mapped when `map`, [`cache::Store::get_mapped`]).
+/// `res_of` gives a node's LDI resolution (part of its record's key).
 pub(super) fn deep_direct(
     scene: &Scene,
     dirs: &Directions,
     hash: SceneHash,
     deep: &[(Source, SourceKey, [SourceKey; 3])],
     res_of: impl Fn(&Source) -> u32 + Sync,
-) -> Vec<Vec<f32>> {
+    map: bool,
+) -> Vec<Buf<f32>> {
     let k = scene.sensors.len();
     let store = dirs.store();
+    let in_place = |r: Option<cache::MappedRecord>| {
+        let r = std::sync::Arc::new(r?);
+        let d = r.section::<f32>(TAG_DIRECT).ok()?;
+        let rows = (d.len() == DIRECT_ROWS * k).then(|| Buf::mapped(&r, d))?;
+        // Validating the record read every page: back to the kernel until a step reads
+        // them.
+        r.release();
+        rows
+    };
     deep.par_iter()
         .map(|(src, _, _)| {
             let key = record_key(hash, dirs, src, res_of(src));
-            let cached = key.as_ref().and_then(|key| {
-                let r = store.get(key)?;
-                let d = r.section::<f32>(TAG_DIRECT).ok()?;
-                (d.len() == DIRECT_ROWS * k).then(|| d.to_vec())
-            });
+            let get = |key: &cache::RecordKey| {
+                if map {
+                    store.get_mapped(key)
+                } else {
+                    store.get(key)
+                }
+            };
+            let cached = key.as_ref().and_then(|key| in_place(get(key)));
             cached.unwrap_or_else(|| {
                 let d = direct_rows(&dirs.responses(src).0, k);
-                if let Some(key) = key.filter(|_| store.is_enabled()) {
-                    store.put(&key, &cache::encode(&key, &[Section::of(TAG_DIRECT, &d)]));
-                }
-                d
+                let stored = key.filter(|key| {
+                    store.is_enabled() && store.put_sections(key, &[Section::of(TAG_DIRECT, &d)])
+                });
+                let stored = stored.filter(|_| map);
+                stored
+                    .and_then(|key| in_place(store.read_back_mapped(&key)))
+                    .unwrap_or(d.into())
             })
         })
         .collect()
@@ -163,7 +181,7 @@ pub(super) fn assemble(
     list: &[Source],
     solved: Vec<NodeData>,
     deep: &[(Source, SourceKey, [SourceKey; 3])],
-    direct: Vec<Vec<f32>>,
+    direct: Vec<Buf<f32>>,
     parts: usize,
 ) -> Vec<(SourceKey, NodeData)> {
     let mut solved: HashMap<SourceKey, (&Source, NodeData)> = list

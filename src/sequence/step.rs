@@ -322,6 +322,15 @@ impl<'a> Engine<'a> {
         }
     }
 
+    /// Counts a day summed by daylight coefficients, which now and then gives back the
+    /// pages of those read in place from the cache ([`Coefficients::day_done`]); nothing
+    /// without them. Values never depend on it.
+    pub fn coefficient_day_done(&self) {
+        if let Some((c, _)) = &self.coefficients {
+            c.day_done();
+        }
+    }
+
     /// Whether steps are independent (daylight coefficients) rather than warm-started.
     pub fn steps_are_independent(&self) -> bool {
         self.coefficients.is_some()
