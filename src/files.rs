@@ -136,6 +136,42 @@ pub fn html_escape(text: &str) -> String {
     out
 }
 
+/// Writes all of `buf` at byte `at` of `f`.
+///
+/// # Errors
+/// The write's I/O error.
+#[cfg(unix)]
+pub fn write_at(f: &std::fs::File, buf: &[u8], at: u64) -> std::io::Result<()> {
+    std::os::unix::fs::FileExt::write_all_at(f, buf, at)
+}
+
+/// Fills `buf` from byte `at` of `f`.
+///
+/// # Errors
+/// The read's I/O error (a file too short included).
+#[cfg(unix)]
+pub fn read_at(f: &std::fs::File, buf: &mut [u8], at: u64) -> std::io::Result<()> {
+    std::os::unix::fs::FileExt::read_exact_at(f, buf, at)
+}
+
+#[cfg(not(unix))]
+#[allow(missing_docs)]
+pub fn write_at(f: &std::fs::File, buf: &[u8], at: u64) -> std::io::Result<()> {
+    use std::io::{Seek, SeekFrom, Write};
+    let mut f = f;
+    f.seek(SeekFrom::Start(at))?;
+    f.write_all(buf)
+}
+
+#[cfg(not(unix))]
+#[allow(missing_docs)]
+pub fn read_at(f: &std::fs::File, buf: &mut [u8], at: u64) -> std::io::Result<()> {
+    use std::io::{Read, Seek, SeekFrom};
+    let mut f = f;
+    f.seek(SeekFrom::Start(at))?;
+    f.read_exact(buf)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

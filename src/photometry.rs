@@ -38,6 +38,14 @@ pub struct ChannelValues {
 }
 
 impl ChannelValues {
+    /// Empty, with room for `entries` grey entries.
+    pub fn with_capacity(entries: usize) -> ChannelValues {
+        ChannelValues {
+            values: Vec::with_capacity(entries),
+            rgb: false,
+        }
+    }
+
     /// Appends one entry; the first coloured one turns every earlier value into three.
     pub fn push(&mut self, v: [f32; 3]) {
         if !self.rgb && (v[0] != v[1] || v[1] != v[2]) {

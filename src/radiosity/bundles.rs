@@ -2,6 +2,7 @@
 //! pixel) counted per mesh row, with fixed-point transmission sums per (row, row) pair and
 //! the glazing mirror's one-way links, normalised to F̂.
 
+use super::link_sum::{Accumulator, Links};
 use super::mesh::Mesh;
 use super::sparse::Sparse;
 use super::strata::bundle_direction;
@@ -76,10 +77,9 @@ pub(super) fn operator(
     };
     // Each direction's links (pair key, fixed-point τ), sorted and merged by the worker
     // that made them, are summed into one [`Accumulator`] a few directions at a time, with
-    // the line counts. The pairs of many directions repeat; one list per worker, each
-    // merged when it had doubled, held four to five times the operator's links at once,
-    // the largest holding of a cold run. Fixed-point sums are exact, so neither the
-    // grouping nor the order changes a bit of the result.
+    // the line counts; past a bound, the sum goes to disk as sorted runs
+    // ([`super::link_sum`]). Fixed-point sums are exact, so neither the grouping, the
+    // order nor the runs change a bit of the result.
     let mut acc = Accumulator::default();
     let mut n = vec![0u64; rows];
     let in_flight = 2 * rayon::current_num_threads().max(1);
@@ -116,14 +116,17 @@ pub(super) fn operator(
             acc.add(pairs);
         }
     }
-    let all = acc.finish();
+    let sum = acc.finish();
     let lines: u64 = n.iter().sum();
-    let entries = all.into_sorted().map(|(k, q)| {
+    let entries = sum.sorted().map(|(k, q)| {
         let (r, c) = ((k >> 32) as u32, k as u32);
         let inv = 1.0 / (n[r as usize].max(1) as f64 * FIX);
         (r, c, q.map(|x| (x as f64 * inv) as f32))
     });
-    (Sparse::from_sorted(rows, entries), lines)
+    (
+        Sparse::from_sorted_len(rows, sum.most_len(), entries),
+        lines,
+    )
 }
 
 /// One pass of a bundle: the window its LDI covers (scene frame, m), its pixel (line
@@ -297,257 +300,6 @@ impl Mirror<'_> {
             let root = self.pscene.vertices[tri as usize];
             let source = self.mesh.row_at(tri, barycentric(root, point));
             pairs.push((receiver as u64) << 32 | source as u64, fixed(out.power));
-        }
-    }
-}
-
-/// Links (receiver row << 32 | source row, fixed-point τ), grey ones with one value: in
-/// a scene without coloured glazing every link is grey, and half the bytes of the
-/// lists, which are the operator build's largest holding.
-#[derive(Default)]
-struct Links {
-    grey: Vec<(u64, u64)>,
-    colour: Vec<(u64, [u64; 3])>,
-}
-
-impl Links {
-    fn push(&mut self, key: u64, q: [u64; 3]) {
-        if q[0] == q[1] && q[1] == q[2] {
-            self.grey.push((key, q[0]));
-        } else {
-            self.colour.push((key, q));
-        }
-    }
-
-    fn len(&self) -> usize {
-        self.grey.len() + self.colour.len()
-    }
-
-    fn extend(&mut self, other: Links) {
-        self.grey.extend(other.grey);
-        self.colour.extend(other.colour);
-    }
-
-    fn retain(&mut self, keep: impl Fn(u64) -> bool) {
-        self.grey.retain(|e| keep(e.0));
-        self.colour.retain(|e| keep(e.0));
-    }
-
-    /// Each list sorted by key, equal keys' values summed.
-    fn merged(self) -> Links {
-        Links {
-            grey: merge_pairs(self.grey, |a, b| *a += b),
-            colour: merge_pairs(self.colour, |a, b| {
-                for (x, y) in a.iter_mut().zip(b) {
-                    *x += y;
-                }
-            }),
-        }
-    }
-
-    /// Every key once, in order, with its grey and colour sums added (exact: fixed
-    /// point).
-    fn into_sorted(self) -> impl Iterator<Item = (u64, [u64; 3])> {
-        let m = self.merged();
-        let mut grey = m.grey.into_iter().peekable();
-        let mut colour = m.colour.into_iter().peekable();
-        std::iter::from_fn(move || match (grey.peek(), colour.peek()) {
-            (Some(&(kg, g)), Some(&(kc, c))) => Some(if kg < kc {
-                grey.next();
-                (kg, [g; 3])
-            } else if kc < kg {
-                colour.next();
-                (kc, c)
-            } else {
-                grey.next();
-                colour.next();
-                (kc, c.map(|x| x + g))
-            }),
-            (Some(&(kg, g)), None) => {
-                grey.next();
-                Some((kg, [g; 3]))
-            }
-            (None, Some(_)) => colour.next(),
-            (None, None) => None,
-        })
-    }
-}
-
-/// Links summed over many directions in bounded memory: one sorted list with one entry
-/// per key, and the directions' lists pending beside it, sorted and merged into it (in
-/// place, from its end) once they reach a quarter of it. Held at most: the links' sum and
-/// half as much again, where lists merged when they had doubled held twice the sum and
-/// more.
-#[derive(Default)]
-struct Accumulator {
-    merged: Links,
-    pending: Links,
-}
-
-impl Accumulator {
-    /// Entries pending below which no merge is made, whatever the sum's size.
-    const MIN_PENDING: usize = 1 << 20;
-
-    fn add(&mut self, links: Links) {
-        self.pending.extend(links);
-        if self.pending.len() > (self.merged.len() / 4).max(Self::MIN_PENDING) {
-            self.flush();
-        }
-    }
-
-    fn flush(&mut self) {
-        let p = std::mem::take(&mut self.pending).merged();
-        let m = &mut self.merged;
-        m.grey = merge_sorted(std::mem::take(&mut m.grey), p.grey, |a, b| *a += b);
-        m.colour = merge_sorted(std::mem::take(&mut m.colour), p.colour, |a, b| {
-            for (x, y) in a.iter_mut().zip(b) {
-                *x += y;
-            }
-        });
-    }
-
-    /// The sum: each list sorted by key, one entry per key.
-    fn finish(mut self) -> Links {
-        self.flush();
-        self.merged
-    }
-}
-
-/// Two lists, each sorted by key with one entry per key, as one such list with equal
-/// keys' values summed (by `add`): written into `a` from its end, so nothing but `a`
-/// grows.
-fn merge_sorted<V: Copy>(
-    mut a: Vec<(u64, V)>,
-    b: Vec<(u64, V)>,
-    add: impl Fn(&mut V, V),
-) -> Vec<(u64, V)> {
-    let Some(&fill) = b.first() else {
-        return a;
-    };
-    let (na, nb) = (a.len(), b.len());
-    a.resize(na + nb, fill);
-    let (mut i, mut j, mut w) = (na, nb, na + nb);
-    // The write index never passes an unread entry of `a`: w − i is what of `b` is left
-    // plus the keys merged, at least 0.
-    while j > 0 {
-        w -= 1;
-        let y = b[j - 1];
-        if i > 0 && a[i - 1].0 > y.0 {
-            a[w] = a[i - 1];
-            i -= 1;
-        } else if i > 0 && a[i - 1].0 == y.0 {
-            let mut x = a[i - 1];
-            add(&mut x.1, y.1);
-            a[w] = x;
-            i -= 1;
-            j -= 1;
-        } else {
-            a[w] = y;
-            j -= 1;
-        }
-    }
-    // Keys merged left a gap of w − i between a's untouched head and the merged tail.
-    if w > i {
-        a.copy_within(w.., i);
-        a.truncate(a.len() - (w - i));
-    }
-    a
-}
-
-/// `v` sorted by key with equal keys' values summed (by `add`), in place.
-fn merge_pairs<V: Copy + Send>(mut v: Vec<(u64, V)>, add: impl Fn(&mut V, V)) -> Vec<(u64, V)> {
-    v.par_sort_unstable_by_key(|e| e.0);
-    let mut w = 0;
-    for i in 0..v.len() {
-        if w > 0 && v[w - 1].0 == v[i].0 {
-            let q = v[i].1;
-            add(&mut v[w - 1].1, q);
-        } else {
-            v[w] = v[i];
-            w += 1;
-        }
-    }
-    v.truncate(w);
-    v.shrink_to_fit();
-    v
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::math::rng::mix64;
-    use std::collections::BTreeMap;
-
-    /// Grey and coloured links, pushed in any order and merged in any grouping, read back
-    /// as one sum per key in key order: the same as a plain map's sums.
-    #[test]
-    fn links_sum_per_key_whatever_their_colour_and_grouping() {
-        let mut want: BTreeMap<u64, [u64; 3]> = BTreeMap::new();
-        let mut parts = vec![Links::default(), Links::default(), Links::default()];
-        for i in 0..3000u64 {
-            let h = mix64(i);
-            let key = ((h % 37) << 32) | ((h >> 20) % 41);
-            let g = (h >> 40) % 1000;
-            let q = if h % 5 == 0 {
-                [g, g + 1, g + 7]
-            } else {
-                [g; 3]
-            };
-            let w = want.entry(key).or_default();
-            for (a, b) in w.iter_mut().zip(q) {
-                *a += b;
-            }
-            parts[(h % 3) as usize].push(key, q);
-        }
-        let mut all = Links::default();
-        for p in parts {
-            all.extend(p.merged());
-            all = all.merged();
-        }
-        assert!(!all.grey.is_empty() && !all.colour.is_empty());
-        let got: Vec<(u64, [u64; 3])> = all.into_sorted().collect();
-        let want: Vec<(u64, [u64; 3])> = want.into_iter().collect();
-        assert_eq!(got, want);
-    }
-
-    /// The accumulator's sums equal a plain map's, whether its merges come after every
-    /// list, every few, or only at the end, with keys before, between and after those
-    /// already merged, and empty lists among them.
-    #[test]
-    fn the_accumulator_sums_per_key_whenever_it_merges() {
-        for every in [1, 3, 1000] {
-            let mut want: BTreeMap<u64, [u64; 3]> = BTreeMap::new();
-            let mut acc = Accumulator::default();
-            for list in 0..200u64 {
-                let mut links = Links::default();
-                for i in 0..(list % 7) * 5 {
-                    let h = mix64(list << 20 | i);
-                    // Few keys, so lists repeat them; the range widens as lists go on.
-                    let key = ((h % (3 + list / 10)) << 32) | ((h >> 24) % 13);
-                    let g = (h >> 40) % 1000;
-                    let q = if h % 4 == 0 { [g, g + 3, 1] } else { [g; 3] };
-                    let w = want.entry(key).or_default();
-                    for (a, b) in w.iter_mut().zip(q) {
-                        *a += b;
-                    }
-                    links.push(key, q);
-                }
-                acc.add(links.merged());
-                if list % every == 0 {
-                    acc.flush();
-                    let grey: Vec<u64> = acc.merged.grey.iter().map(|e| e.0).collect();
-                    let colour: Vec<u64> = acc.merged.colour.iter().map(|e| e.0).collect();
-                    for l in [grey, colour] {
-                        assert!(
-                            l.windows(2).all(|w| w[0] < w[1]),
-                            "sorted, one entry per key"
-                        );
-                    }
-                }
-            }
-            let got: Vec<(u64, [u64; 3])> = acc.finish().into_sorted().collect();
-            let want: Vec<(u64, [u64; 3])> = want.into_iter().collect();
-            assert_eq!(got, want, "merging every {every} lists");
         }
     }
 }

@@ -14,6 +14,7 @@ mod bundles; // the operator estimate: line bundles through LDIs, glazing mirror
 pub mod coefficients; // grey daylight coefficients of many directions, blocked adjoint
 mod coarse; // the operator one level coarser, for the discretisation estimate
 mod gather; // sensor gather matrix, and the sensors' reading of a solution
+mod link_sum; // the operator build's sum of links over directions, spilled as sorted runs
 pub mod mesh; // the fixed mesh: unknowns, point → row, area averages onto it
 pub mod response; // adjoint daylight coefficients
 mod solve; // Gauss–Seidel, stop rule, warm start

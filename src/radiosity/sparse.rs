@@ -211,9 +211,21 @@ impl Sparse {
         n_rows: usize,
         entries: impl Iterator<Item = (u32, u32, [f32; 3])>,
     ) -> Sparse {
+        Sparse::from_sorted_len(n_rows, 0, entries)
+    }
+
+    /// [`Self::from_sorted`] for at most `most` entries, known beforehand: its arrays are
+    /// made that large at once, never grown (growing a large one copies it, holding it
+    /// twice), and shrunk to their entries at the end (a large allocation's pages that
+    /// were never written are never resident).
+    pub(super) fn from_sorted_len(
+        n_rows: usize,
+        most: usize,
+        entries: impl Iterator<Item = (u32, u32, [f32; 3])>,
+    ) -> Sparse {
         let mut offsets = vec![0u32; n_rows + 1];
-        let mut cols = Vec::new();
-        let mut vals = ChannelValues::default();
+        let mut cols = Vec::with_capacity(most);
+        let mut vals = ChannelValues::with_capacity(most);
         for (r, c, v) in entries {
             offsets[r as usize + 1] += 1;
             cols.push(c);

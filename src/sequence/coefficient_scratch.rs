@@ -10,6 +10,7 @@
 //! not in the process's). Values are written and read bit for bit, so the coefficients do
 //! not depend on it. Where no file can be made, the rows are held in memory as before.
 
+use crate::files::{read_at, write_at};
 use std::fs::File;
 use std::io;
 
@@ -77,32 +78,6 @@ impl Scratch {
             None => Ok(self.held[a..b].to_vec()),
         }
     }
-}
-
-#[cfg(unix)]
-fn write_at(f: &File, buf: &[u8], at: u64) -> io::Result<()> {
-    std::os::unix::fs::FileExt::write_all_at(f, buf, at)
-}
-
-#[cfg(unix)]
-fn read_at(f: &File, buf: &mut [u8], at: u64) -> io::Result<()> {
-    std::os::unix::fs::FileExt::read_exact_at(f, buf, at)
-}
-
-#[cfg(not(unix))]
-fn write_at(f: &File, buf: &[u8], at: u64) -> io::Result<()> {
-    use std::io::{Seek, SeekFrom, Write};
-    let mut f = f;
-    f.seek(SeekFrom::Start(at))?;
-    f.write_all(buf)
-}
-
-#[cfg(not(unix))]
-fn read_at(f: &File, buf: &mut [u8], at: u64) -> io::Result<()> {
-    use std::io::{Read, Seek, SeekFrom};
-    let mut f = f;
-    f.seek(SeekFrom::Start(at))?;
-    f.read_exact(buf)
 }
 
 #[cfg(test)]
