@@ -239,12 +239,12 @@ impl Store {
         self.read(key, true, false)
     }
 
-    /// As [`Self::get`], but memory-mapped whatever its size: for records a run keeps
-    /// until it ends and reads now and then (a year's daylight coefficients, a hundred
-    /// kilobytes each), whose pages can then go back to the kernel between reads
-    /// ([`MappedRecord::release`]).
-    pub fn get_mapped(&self, key: &RecordKey) -> Option<MappedRecord> {
-        self.read(key, true, true)
+    /// As [`Self::get`], but, where `map_small`, memory-mapped whatever its size: for
+    /// records a run keeps until it ends and reads now and then (a year's daylight
+    /// coefficients, a hundred kilobytes each), whose pages can then go back to the kernel
+    /// between reads ([`MappedRecord::release`]).
+    pub fn get_mapped(&self, key: &RecordKey, map_small: bool) -> Option<MappedRecord> {
+        self.read(key, true, map_small)
     }
 
     /// The record this store has just written for `key` ([`Self::put`]), read back

@@ -90,13 +90,6 @@ impl Coefficients {
             && ((union.len() * k * (DIRECT_ROWS + parts + 1) * 4) as u64 >= MAP_MIN_BYTES
                 || opts.max_memory_given);
         stats.in_place = map_rows;
-        let get = |key: &RecordKey| {
-            if map_rows {
-                store.get_mapped(key)
-            } else {
-                store.get(key)
-            }
-        };
         // Grid vertices feed only the interreflection mesh (0.25 m² rows, not shadows on
         // sensors), so they are projected at the sky nodes' resolution.
         let res_of = |src: &Source| {
@@ -109,16 +102,18 @@ impl Coefficients {
             .par_iter()
             .map(|src| {
                 let key = record_key(hash, dirs, src, res_of(src))?;
-                in_place(get(&key)?, parts, k, !src.is_sun()).map(|(nd, whole)| {
-                    if whole {
-                        return nd;
-                    }
-                    let d = direct_rows(&dirs.sensor_responses(src, res_of(src)), k);
-                    NodeData {
-                        direct: d.into(),
-                        ..nd
-                    }
-                })
+                in_place(store.get_mapped(&key, map_rows)?, parts, k, !src.is_sun()).map(
+                    |(nd, whole)| {
+                        if whole {
+                            return nd;
+                        }
+                        let d = direct_rows(&dirs.sensor_responses(src, res_of(src)), k);
+                        NodeData {
+                            direct: d.into(),
+                            ..nd
+                        }
+                    },
+                )
             })
             .collect();
         let todo: Vec<usize> = (0..list.len()).filter(|&i| data[i].is_none()).collect();
@@ -352,16 +347,10 @@ fn in_place(
     direct: bool,
 ) -> Option<(NodeData, bool)> {
     let r = Arc::new(r);
-    let v = r.section::<f32>(TAG_VALUES).ok()?;
-    if v.len() != (parts + 1) * k {
-        return None;
-    }
-    let indirect = Arc::new(Buf::mapped(&r, v)?);
+    let indirect = Arc::new(mapped_rows(&r, TAG_VALUES, (parts + 1) * k)?);
     let rows = direct
-        .then(|| r.section::<f32>(TAG_DIRECT).ok())
-        .flatten()
-        .filter(|d| d.len() == DIRECT_ROWS * k)
-        .and_then(|d| Buf::mapped(&r, d));
+        .then(|| mapped_rows(&r, TAG_DIRECT, DIRECT_ROWS * k))
+        .flatten();
     let whole = rows.is_some() || !direct;
     // Validating the record read every page: back to the kernel until a step reads them.
     r.release();
@@ -373,6 +362,12 @@ fn in_place(
         },
         whole,
     ))
+}
+
+/// Section `tag` of record `r` read in place when it holds `len` values, else `None`.
+pub(super) fn mapped_rows(r: &Arc<cache::MappedRecord>, tag: u32, len: usize) -> Option<Buf<f32>> {
+    let v = r.section::<f32>(tag).ok()?;
+    (v.len() == len).then(|| Buf::mapped(r, v))?
 }
 
 /// What coefficient records depend on: the directions' hash (geometry, glazing, sensors,

@@ -99,8 +99,8 @@ mod spill;
 mod scratch;
 pub use budget::adjoint_budget;
 pub(super) use cut_batch::CutBatch;
-use prepare::record_key;
 pub(super) use prepare::Watch;
+use prepare::{mapped_rows, record_key};
 use sums::axpy;
 
 /// What preparing the coefficients did (`report.json`).

@@ -27,7 +27,7 @@
 //! 2 (22° ancestors) even the quadrature sum covered only 86 %, so `draft` keeps every
 //! node.
 
-use super::{direct_rows, record_key, Directions, NodeData, DIRECT_ROWS, TAG_DIRECT};
+use super::{direct_rows, mapped_rows, record_key, Directions, NodeData, DIRECT_ROWS, TAG_DIRECT};
 use crate::cache::{self, SceneHash, Section};
 use crate::radiosity::Buf;
 use crate::scene::Scene;
@@ -127,7 +127,7 @@ pub(super) fn inherit(
 
 /// The direct rows of the `deep` nodes, in their order: from each node's coefficient
 /// record, or from sensor rays alone (no projection), then recorded; read in place from
-/// the record either way where the cache holds it (mapped when `map`, [`cache::Store::get_mapped`]).
+/// the record either way where the cache holds it (mapped whatever its size when `map`, [`cache::Store::get_mapped`]).
 /// `res_of` gives a node's LDI resolution (part of its record's key).
 pub(super) fn deep_direct(
     scene: &Scene,
@@ -141,8 +141,7 @@ pub(super) fn deep_direct(
     let store = dirs.store();
     let in_place = |r: Option<cache::MappedRecord>| {
         let r = std::sync::Arc::new(r?);
-        let d = r.section::<f32>(TAG_DIRECT).ok()?;
-        let rows = (d.len() == DIRECT_ROWS * k).then(|| Buf::mapped(&r, d))?;
+        let rows = mapped_rows(&r, TAG_DIRECT, DIRECT_ROWS * k);
         // Validating the record read every page: back to the kernel until a step reads
         // them.
         r.release();
@@ -151,14 +150,9 @@ pub(super) fn deep_direct(
     deep.par_iter()
         .map(|(src, _, _)| {
             let key = record_key(hash, dirs, src, res_of(src));
-            let get = |key: &cache::RecordKey| {
-                if map {
-                    store.get_mapped(key)
-                } else {
-                    store.get(key)
-                }
-            };
-            let cached = key.as_ref().and_then(|key| in_place(get(key)));
+            let cached = key
+                .as_ref()
+                .and_then(|key| in_place(store.get_mapped(key, map)));
             cached.unwrap_or_else(|| {
                 let d = direct_rows(&dirs.responses(src).0, k);
                 let stored = key.filter(|key| {
