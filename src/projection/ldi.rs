@@ -1,7 +1,11 @@
 //! The Layered Depth Image of one parallel projection (Shade et al. 1998; Besuievsky &
 //! Martín §5.1): an orthographic camera looking against the source direction; every pixel
-//! keeps all fragments along its line, ordered from the source inwards, each with the
-//! transmission of the light that reaches it (1 until glazing or an opaque surface).
+//! keeps all fragments along its line, ordered from the source inwards. The transmission
+//! of the light that reaches a fragment (1 until glazing or an opaque surface) is the
+//! product of the pass factors in front of it, taken as the list is read
+//! ([`Ldi::arriving`], [`Ldi::for_each_arrival`]) rather than stored with each fragment:
+//! a fragment is then 8 bytes instead of 20, and the two LDIs in flight were the largest
+//! part of a cold annual run's peak on a building with few sensors.
 
 use super::ProjectionScene;
 use crate::math::{frame, raster};
@@ -45,8 +49,6 @@ pub struct Fragment {
     pub tri: u32,
     /// Height along the source direction at the pixel centre, m.
     pub height: f32,
-    /// Transmission of the light arriving at this fragment, per channel.
-    pub t_in: [f32; 3],
 }
 
 /// Fragments closer than this along the source direction (m) lie on one surface: exported
@@ -281,19 +283,19 @@ impl Ldi {
             }
             ends[k] = staged.len();
         }
+        // Each pixel's end, then its fragments placed downwards from it: the counts become
+        // the starts without a second array. The order they are placed in does not matter,
+        // since each list is sorted below by a key no two fragments of a pixel share.
         let mut offsets = counts;
         let mut acc = 0u32;
         for c in offsets.iter_mut() {
-            let n = *c;
+            acc += *c;
             *c = acc;
-            acc += n;
         }
-        let mut fill = offsets.clone();
         let mut fragments = vec![
             Fragment {
                 tri: 0,
                 height: 0.0,
-                t_in: [0.0; 3]
             };
             acc as usize
         ];
@@ -303,12 +305,8 @@ impl Ldi {
             for &(px, height) in &staged[start..end] {
                 let px = px as usize;
                 for tri in std::iter::once(k as u32).chain(back) {
-                    fragments[fill[px] as usize] = Fragment {
-                        tri,
-                        height,
-                        t_in: [0.0; 3],
-                    };
-                    fill[px] += 1;
+                    offsets[px] -= 1;
+                    fragments[offsets[px] as usize] = Fragment { tri, height };
                 }
             }
             start = end;
@@ -324,11 +322,6 @@ impl Ldi {
             // Nearest the source first; ties broken by triangle index for determinism.
             list.sort_unstable_by(|a, b| b.height.total_cmp(&a.height).then(a.tri.cmp(&b.tri)));
             order_coincident_facing(list, scene, &facing);
-            let mut t = Rgb::ONE;
-            for f in list.iter_mut() {
-                f.t_in = [t.x as f32, t.y as f32, t.z as f32];
-                t *= pass[f.tri as usize];
-            }
         }
         Ldi {
             camera,
@@ -354,6 +347,37 @@ impl Ldi {
     pub fn pixel(&self, i: u32, j: u32) -> &[Fragment] {
         let px = j as usize * self.camera.width as usize + i as usize;
         &self.fragments[self.offsets[px] as usize..self.offsets[px + 1] as usize]
+    }
+
+    /// Transmission (per channel) of the light arriving at each fragment of `list` (one
+    /// pixel's, nearest the source first): the product of the pass factors of those in
+    /// front. Rounded to f32, as the fragments held it when they stored it, so that the
+    /// projections' records are the same to the bit.
+    fn arrivals<'a>(&'a self, list: &'a [Fragment]) -> impl Iterator<Item = (&'a Fragment, Rgb)> {
+        list.iter().scan(Rgb::ONE, move |t, f| {
+            let arriving = Rgb::new(t.x as f32 as f64, t.y as f32 as f64, t.z as f32 as f64);
+            *t *= self.pass[f.tri as usize];
+            Some((f, arriving))
+        })
+    }
+
+    /// Transmission (per channel) of the light arriving at triangle `tri`'s fragment in
+    /// pixel `(i, j)`; `None` where the triangle has no fragment there.
+    pub fn arriving(&self, i: u32, j: u32, tri: u32) -> Option<Rgb> {
+        self.arrivals(self.pixel(i, j))
+            .find(|(f, _)| f.tri == tri)
+            .map(|(_, t)| t)
+    }
+
+    /// Calls `visit` with every fragment and the transmission of the light arriving at it,
+    /// in the order of [`Ldi::fragments`].
+    pub fn for_each_arrival(&self, mut visit: impl FnMut(&Fragment, Rgb)) {
+        for w in self.offsets.windows(2) {
+            let list = &self.fragments[w[0] as usize..w[1] as usize];
+            for (f, t) in self.arrivals(list) {
+                visit(f, t);
+            }
+        }
     }
 
     /// Transmission (per channel) of light reaching height `h` in pixel `(i, j)` along the
@@ -440,13 +464,17 @@ pub(super) mod tests {
         let list = ldi.pixel(c.x as u32, c.y as u32);
         assert_eq!(list.len(), 2);
         assert!(list[0].height > list[1].height);
-        assert_eq!(list[0].t_in, [1.0; 3]);
-        assert_eq!(list[1].t_in, [0.0; 3]);
+        let (i, j) = (c.x as u32, c.y as u32);
+        assert_eq!(ldi.arriving(i, j, list[0].tri), Some(Rgb::ONE));
+        assert_eq!(ldi.arriving(i, j, list[1].tri), Some(Rgb::ZERO));
         // Outside the upper quad the lower one is lit.
         let c = ldi.camera.to_pixel(DVec3::new(1.8, 1.8, 0.0));
         let list = ldi.pixel(c.x as u32, c.y as u32);
         assert_eq!(list.len(), 1);
-        assert_eq!(list[0].t_in, [1.0; 3]);
+        assert_eq!(
+            ldi.arriving(c.x as u32, c.y as u32, list[0].tri),
+            Some(Rgb::ONE)
+        );
         // Projected area from fragment counts matches the geometry (4² + 2² m²).
         let area = ldi.fragment_count() as f64 * ldi.camera.pixel.powi(2);
         assert!((area - 20.0).abs() / 20.0 < 0.05, "{area}");
@@ -541,5 +569,57 @@ pub(super) mod tests {
         }
         assert_eq!(ldi.fragment_count(), expected);
         assert!(expected > 10_000, "{expected}");
+    }
+
+    /// The light arriving at a fragment has passed every pane in front of it: behind two
+    /// panes of glazing it is the product of their transmittances at that incidence, and
+    /// behind an opaque surface nothing. Read pixel by pixel or all at once, the same.
+    #[test]
+    fn light_arriving_behind_panes_is_the_product_of_their_transmittances() {
+        let glass = |name: &str, tf: f64| Material {
+            name: name.into(),
+            kd: Rgb::ZERO,
+            tf: Rgb::new(tf, 0.5 * tf, 0.25 * tf),
+            ke: Rgb::ZERO,
+        };
+        let opaque = Material {
+            name: "floor".into(),
+            kd: Rgb::splat(0.5),
+            tf: Rgb::ZERO,
+            ke: Rgb::ZERO,
+        };
+        let materials = vec![glass("a", 0.8), glass("b", 0.6), opaque];
+        // Two panes over a floor over a ground, each a quad; tilted light.
+        let mut tris = Vec::new();
+        for (z, m) in [(3.0, 0), (2.0, 1), (1.0, 2), (0.0, 2)] {
+            tris.extend(quad(z, 2.0).map(|t| (t, m)));
+        }
+        let s = scene_of(tris, materials.clone());
+        let dir = DVec3::new(0.3, 0.1, 1.0).normalize();
+        let ldi = Ldi::build(&s, dir, 60);
+        let t = |m: usize| materials[m].transmittance(dir.z);
+        let expected = [Rgb::ONE, t(0), t(0) * t(1), Rgb::ZERO];
+        let c = ldi.camera.to_pixel(DVec3::ZERO);
+        let (i, j) = (c.x as u32, c.y as u32);
+        let list = ldi.pixel(i, j);
+        assert_eq!(list.len(), 4);
+        for (f, want) in list.iter().zip(expected) {
+            let got = ldi.arriving(i, j, f.tri).unwrap();
+            assert!((got - want).abs().max_element() < 1e-6, "{got} {want}");
+            assert!(got.min_element() > 0.0 || want == Rgb::ZERO);
+        }
+        assert_eq!(ldi.arriving(i, j, 1_000), None);
+        let mut by_pixel = Vec::new();
+        for j in 0..ldi.camera.height {
+            for i in 0..ldi.camera.width {
+                for f in ldi.pixel(i, j) {
+                    by_pixel.push((f.tri, ldi.arriving(i, j, f.tri).unwrap()));
+                }
+            }
+        }
+        let mut all = Vec::new();
+        ldi.for_each_arrival(|f, t| all.push((f.tri, t)));
+        assert_eq!(all, by_pixel);
+        assert!(all.len() > 4_000, "{}", all.len());
     }
 }

@@ -43,8 +43,8 @@ fn coverage(ldi: &Ldi, faces: [u32; 2], v: &[DVec3; 3]) -> Coverage {
     let h = v.map(|x| cam.height_of(x));
     let mut c = Coverage::default();
     raster::rasterize(p, h, cam.width, cam.height, |i, j, z| {
-        let t = match ldi.pixel(i, j).iter().find(|f| f.tri == tri) {
-            Some(f) => Rgb::new(f.t_in[0] as f64, f.t_in[1] as f64, f.t_in[2] as f64),
+        let t = match ldi.arriving(i, j, tri) {
+            Some(t) => t,
             // Rounding at the midpoints can put a child's sample just outside its
             // triangle's own samples; fall back to the line itself.
             None => ldi.transmission_at(i, j, z, faces),
@@ -62,10 +62,7 @@ fn coverage(ldi: &Ldi, faces: [u32; 2], v: &[DVec3; 3]) -> Coverage {
 /// first, and this spares that second rasterisation and its random fragment lookups.
 fn whole_coverages(ldi: &Ldi, triangles: usize) -> Vec<Coverage> {
     let mut out = vec![Coverage::default(); triangles];
-    for f in ldi.fragments() {
-        let t = Rgb::new(f.t_in[0] as f64, f.t_in[1] as f64, f.t_in[2] as f64);
-        out[f.tri as usize].add(t);
-    }
+    ldi.for_each_arrival(|f, t| out[f.tri as usize].add(t));
     out
 }
 
