@@ -4,8 +4,8 @@
 //! of the light that reaches a fragment (1 until glazing or an opaque surface) is the
 //! product of the pass factors in front of it, taken as the list is read
 //! ([`Ldi::arriving`], [`Ldi::for_each_arrival`]) rather than stored with each fragment:
-//! a fragment is then 8 bytes instead of 20, and the two LDIs in flight were the largest
-//! part of a cold annual run's peak on a building with few sensors.
+//! a fragment is then 8 bytes instead of 20, and the LDIs in flight were a cold annual
+//! run's largest allocations on a building with few sensors.
 
 use super::ProjectionScene;
 use crate::math::{frame, raster};
