@@ -336,13 +336,6 @@ impl Ldi {
         self.fragments.len()
     }
 
-    /// Every fragment, pixel by pixel in row order (`j`, then `i`, ascending), each
-    /// pixel's list nearest the source first: the order in which rasterising a triangle
-    /// visits its pixels.
-    pub fn fragments(&self) -> &[Fragment] {
-        &self.fragments
-    }
-
     /// The fragment list of pixel `(i, j)`, nearest the source first.
     pub fn pixel(&self, i: u32, j: u32) -> &[Fragment] {
         let px = j as usize * self.camera.width as usize + i as usize;
@@ -370,7 +363,8 @@ impl Ldi {
     }
 
     /// Calls `visit` with every fragment and the transmission of the light arriving at it,
-    /// in the order of [`Ldi::fragments`].
+    /// pixel by pixel in row order (`j`, then `i`, ascending), each pixel's list nearest
+    /// the source first: the order in which rasterising a triangle visits its pixels.
     pub fn for_each_arrival(&self, mut visit: impl FnMut(&Fragment, Rgb)) {
         for w in self.offsets.windows(2) {
             let list = &self.fragments[w[0] as usize..w[1] as usize];

@@ -19,6 +19,7 @@ pub mod mesh; // the fixed mesh: unknowns, point → row, area averages onto it
 pub mod response; // adjoint daylight coefficients
 mod solve; // Gauss–Seidel, stop rule, warm start
 mod sparse; // sparse RGB rows, held or read in place from a cache record
+mod spread; // the batched apply's kernel: a held response spread over directions
 mod strata; // equal-area direction strata of the bundles
 pub mod transport; // the Transport type, its parameters and build
 
