@@ -35,6 +35,7 @@ mod path_pass;
 pub mod compliance;
 pub mod surfaces;
 pub mod render;
+mod render_frames; // a render run's frames: plan, frames.csv rows, resume fingerprint
 pub mod report;
 
 pub use config::{Quality, SkySpec};
