@@ -136,6 +136,36 @@ fn order_coincident_facing(
     }
 }
 
+/// What an [`Ldi`] is read for, which decides the fragments it keeps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reader {
+    /// Global lines: every fragment, both faces of a two-sided surface (each face is
+    /// linked with what it sees on its own side).
+    Lines,
+    /// A source's projection, whose pixels are read for the elements inside its window
+    /// box (or the whole scene) and what lies in front of them. It drops two kinds of
+    /// fragment:
+    /// * of a two-sided surface (a triangle and its back face,
+    ///   [`ProjectionScene::twin`]), the face turned away from the source (the front face
+    ///   when the line grazes both). The two lie at the same heights and the one towards
+    ///   the source is opaque, so what lies behind them is dark and the face turned away
+    ///   receives nothing. One change: where a line runs along the edge two faces share
+    ///   (a box's corner), the list held all four faces at one height, ordered by index,
+    ///   and a face turned away from the source could come first and hide the lit face
+    ///   beside it; now it is not there;
+    /// * those beyond the window box along the line (below where the line leaves it, by
+    ///   more than a margin), and every fragment of a pixel whose line misses the box: no
+    ///   element refined against this image lies there, and they are behind everything
+    ///   that does. Exact: the records are those of [`Reader::SourceUncut`] to the bit.
+    ///   A site's ground seen past a window's edges was most of a windowed image's
+    ///   fragments.
+    Source,
+    /// [`Reader::Source`] without the cut beyond the window box: for the check that the
+    /// cut drops no fragment its refinement reads (the records must be the same to the
+    /// bit).
+    SourceUncut,
+}
+
 /// A Layered Depth Image: per pixel, a depth-ordered fragment list (CSR layout).
 #[derive(Clone, Debug)]
 pub struct Ldi {
@@ -147,37 +177,113 @@ pub struct Ldi {
     pass: Vec<Rgb>,
 }
 
+/// Where a source's projection stops reading along each pixel's line ([`Reader::Source`]):
+/// the height (along the source direction, m) at which the line leaves the window box on
+/// the side away from the source, less a margin.
+struct Beyond {
+    /// The line of pixel (i, j) is `base + u·(i·pixel) + v·(j·pixel) + dir·h`.
+    base: DVec3,
+    step_u: DVec3,
+    step_v: DVec3,
+    inv_dir: DVec3,
+    lo: DVec3,
+    hi: DVec3,
+    margin: f64,
+    /// Whether anything is dropped.
+    active: bool,
+}
+
+impl Beyond {
+    fn nothing() -> Beyond {
+        Beyond {
+            base: DVec3::ZERO,
+            step_u: DVec3::ZERO,
+            step_v: DVec3::ZERO,
+            inv_dir: DVec3::ZERO,
+            lo: DVec3::ZERO,
+            hi: DVec3::ZERO,
+            margin: 0.0,
+            active: false,
+        }
+    }
+
+    /// The box `w` (scene frame, m) seen by `camera`, grown by a margin: a pixel, plus
+    /// 10⁻³ of the box's diagonal and 1 mm. The pixel covers a point read off its
+    /// pixel's centre line (an element too small to cover a pixel centre is read at the
+    /// pixel holding its centroid, up to 0.71 pixel from it); the rest is far above the
+    /// rounding of a fragment's f32 height and [`COINCIDENT_M`], so every fragment inside
+    /// the box, and every fragment a run of coincident ones inside it could be ordered
+    /// against, is kept.
+    fn new(camera: &Camera, w: (DVec3, DVec3)) -> Beyond {
+        let c = camera;
+        Beyond {
+            base: c.u * (c.origin.x + 0.5 * c.pixel) + c.v * (c.origin.y + 0.5 * c.pixel),
+            step_u: c.u * c.pixel,
+            step_v: c.v * c.pixel,
+            inv_dir: c.dir.recip(),
+            lo: w.0,
+            hi: w.1,
+            margin: 1e-3 * (w.1 - w.0).length() + 1e-3 + c.pixel,
+            active: true,
+        }
+    }
+
+    /// Whether the fragment at height `z` of pixel (i, j) lies beyond the box, or the
+    /// pixel's line misses the box.
+    fn drops(&self, i: u32, j: u32, z: f64) -> bool {
+        if !self.active {
+            return false;
+        }
+        let o = self.base + self.step_u * i as f64 + self.step_v * j as f64;
+        // Slabs, growing the box by the margin: the line o + dir·t is inside for t in
+        // [t_low, t_high].
+        let lo = (self.lo - DVec3::splat(self.margin) - o) * self.inv_dir;
+        let hi = (self.hi + DVec3::splat(self.margin) - o) * self.inv_dir;
+        let (near, far) = (lo.min(hi), lo.max(hi));
+        // An axis the line runs parallel to gives ±inf at both ends, or NaN where the
+        // line lies in one of the slab's planes; `max_element` and `min_element` pass
+        // over NaN, which takes that axis as inside (the fragment is kept).
+        let t_low = near.max_element();
+        let t_high = far.min_element();
+        t_low > t_high || z < t_low - self.margin
+    }
+}
+
 impl Ldi {
     /// Scan-converts every triangle (both faces occlude) along `dir` at a resolution of
     /// `resolution` pixels along the image's longer side.
     pub fn build(scene: &ProjectionScene, dir: DVec3, resolution: u32) -> Ldi {
-        Ldi::build_sized(scene, dir, None, DVec2::ZERO, |ext| {
+        Ldi::build_sized(scene, dir, None, DVec2::ZERO, Reader::Lines, |ext| {
             ext.max_element() / resolution.max(1) as f64
         })
     }
 
     /// An LDI over the projection of the box `window` only, `resolution` pixels along the
-    /// longer side of that projection (its pixel no finer than `floor_m` metres).
+    /// longer side of that projection (its pixel no finer than `floor_m` metres), holding
+    /// what `reader` reads.
     pub fn build_region(
         scene: &ProjectionScene,
         dir: DVec3,
         resolution: u32,
         window: (DVec3, DVec3),
         floor_m: f64,
+        reader: Reader,
     ) -> Ldi {
-        Ldi::build_sized(scene, dir, Some(window), DVec2::ZERO, |ext| {
+        Ldi::build_sized(scene, dir, Some(window), DVec2::ZERO, reader, |ext| {
             (ext.max_element() / resolution.max(1) as f64).max(floor_m)
         })
     }
 
-    /// As [`Ldi::build`], its pixel no finer than `floor_m` metres.
+    /// As [`Ldi::build`], its pixel no finer than `floor_m` metres, holding what `reader`
+    /// reads.
     pub fn build_floored(
         scene: &ProjectionScene,
         dir: DVec3,
         resolution: u32,
         floor_m: f64,
+        reader: Reader,
     ) -> Ldi {
-        Ldi::build_sized(scene, dir, None, DVec2::ZERO, |ext| {
+        Ldi::build_sized(scene, dir, None, DVec2::ZERO, reader, |ext| {
             (ext.max_element() / resolution.max(1) as f64).max(floor_m)
         })
     }
@@ -186,21 +292,23 @@ impl Ldi {
     /// direction: every bundle then has the same line density (lines per m² across the
     /// bundle), which global-line estimates need.
     pub fn build_with_pixel(scene: &ProjectionScene, dir: DVec3, pixel_m: f64) -> Ldi {
-        Ldi::build_sized(scene, dir, None, DVec2::ZERO, |_| pixel_m)
+        Ldi::build_sized(scene, dir, None, DVec2::ZERO, Reader::Lines, |_| pixel_m)
     }
 
     /// As [`Ldi::build_with_pixel`], the image covering only the projection of the box
     /// `window` (scene frame, m): lines that miss the box are not drawn, fragments along
-    /// the drawn ones are complete. The pixel grid is shifted by `jitter` (fractions of a
-    /// pixel, each in [0, 1)) so that random bundles do not alias with the geometry.
+    /// the drawn ones are complete for [`Reader::Lines`]. The pixel grid is shifted by
+    /// `jitter` (fractions of a pixel, each in [0, 1)) so that random bundles do not alias
+    /// with the geometry.
     pub fn build_window(
         scene: &ProjectionScene,
         dir: DVec3,
         pixel_m: f64,
         window: (DVec3, DVec3),
         jitter: DVec2,
+        reader: Reader,
     ) -> Ldi {
-        Ldi::build_sized(scene, dir, Some(window), jitter, |_| pixel_m)
+        Ldi::build_sized(scene, dir, Some(window), jitter, reader, |_| pixel_m)
     }
 
     fn build_sized(
@@ -208,6 +316,7 @@ impl Ldi {
         dir: DVec3,
         window: Option<(DVec3, DVec3)>,
         jitter: DVec2,
+        reader: Reader,
         pixel_of: impl Fn(DVec2) -> f64,
     ) -> Ldi {
         let (u, v) = frame::basis(dir);
@@ -268,14 +377,34 @@ impl Ldi {
         // heights are staged (8 bytes a pixel, freed when the image is built) while the
         // pixels' counts are taken, then placed in the same order a second rasterisation
         // would place them (it measured a tenth of a building instant's time).
+        let kept = |k: usize| -> [Option<u32>; 2] {
+            let back = scene.back_of(k);
+            match (reader, back) {
+                (Reader::Source | Reader::SourceUncut, Some(b))
+                    if scene.normals[k].dot(dir) <= 0.0
+                        && scene.normals[b as usize].dot(dir) > 0.0 =>
+                {
+                    [Some(b), None]
+                }
+                (Reader::Source | Reader::SourceUncut, _) => [Some(k as u32), None],
+                (Reader::Lines, _) => [Some(k as u32), back],
+            }
+        };
+        let beyond = match (reader, window) {
+            (Reader::Source, Some(w)) => Beyond::new(&camera, w),
+            _ => Beyond::nothing(),
+        };
         let mut counts = vec![0u32; n_pix + 1];
         let mut staged: Vec<(u32, f32)> = Vec::new();
         let mut ends = vec![0usize; scene.vertices.len()];
         for (k, t) in scene.vertices.iter().enumerate() {
             if !scene.is_back_face(k) {
-                let faces = 1 + u32::from(scene.back_of(k).is_some());
+                let faces = kept(k).iter().flatten().count() as u32;
                 let (p, h) = project(t);
                 raster::rasterize(p, h, width, height, |i, j, z| {
+                    if beyond.drops(i, j, z) {
+                        return;
+                    }
                     let px = j as usize * width as usize + i as usize;
                     counts[px] += faces;
                     staged.push((px as u32, z as f32));
@@ -301,10 +430,10 @@ impl Ldi {
         ];
         let mut start = 0;
         for (k, &end) in ends.iter().enumerate() {
-            let back = scene.back_of(k);
+            let faces = kept(k);
             for &(px, height) in &staged[start..end] {
                 let px = px as usize;
-                for tri in std::iter::once(k as u32).chain(back) {
+                for tri in faces.into_iter().flatten() {
                     offsets[px] -= 1;
                     fragments[offsets[px] as usize] = Fragment { tri, height };
                 }

@@ -9,7 +9,7 @@
 pub mod ldi;
 pub mod refine;
 
-pub use ldi::{Camera, Ldi};
+pub use ldi::{Camera, Ldi, Reader};
 pub use refine::refine_all;
 
 use crate::hierarchy::ElementKey;
@@ -220,17 +220,37 @@ pub fn project(
     resolution: u32,
     params: &ProjectionParams,
 ) -> DirectionRecord {
+    project_reading(scene, dir, resolution, params, Reader::Source)
+}
+
+/// [`project`] with LDIs holding what `reader` reads: [`Reader::Source`] is what
+/// [`project`] uses; [`Reader::Lines`] keeps every fragment, and must give the same record
+/// to the bit (the check that the fragments a source's LDI drops are never read).
+pub fn project_reading(
+    scene: &ProjectionScene,
+    dir: DVec3,
+    resolution: u32,
+    params: &ProjectionParams,
+    reader: Reader,
+) -> DirectionRecord {
     let floor = params.pixel_floor_m();
     let mut record = if scene.windows.len() <= 1 {
-        let ldi = Ldi::build_floored(scene, dir, resolution, floor);
+        let ldi = Ldi::build_floored(scene, dir, resolution, floor, reader);
         refine_all(scene, &[ldi], &[], params)
     } else {
-        let first = Ldi::build_region(scene, dir, resolution, scene.windows[0], floor);
+        let first = Ldi::build_region(scene, dir, resolution, scene.windows[0], floor, reader);
         let pixel = first.camera.pixel;
         let mut ldis = vec![first];
         for (k, w) in scene.windows.iter().enumerate().skip(1) {
             let p = pixel * crate::scene::WINDOW_PIXEL_GROWTH.powi(k as i32);
-            ldis.push(Ldi::build_window(scene, dir, p, *w, glam::DVec2::ZERO));
+            ldis.push(Ldi::build_window(
+                scene,
+                dir,
+                p,
+                *w,
+                glam::DVec2::ZERO,
+                reader,
+            ));
         }
         refine_all(scene, &ldis, &scene.windows, params)
     };

@@ -9,7 +9,7 @@ use super::strata::bundle_direction;
 use crate::math::rng::uniform;
 use crate::photometry::Rgb;
 use crate::projection::ldi::Fragment;
-use crate::projection::{Ldi, ProjectionScene};
+use crate::projection::{Ldi, ProjectionScene, Reader};
 use crate::trace::{barycentric, End, Tracer};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -164,7 +164,14 @@ fn bundle(
     counts: &mut [u32],
 ) {
     let (d, pass_factor) = (line.d, line.pass_factor);
-    let ldi = Ldi::build_window(pscene, d, pass.pixel, pass.window, line.jitter);
+    let ldi = Ldi::build_window(
+        pscene,
+        d,
+        pass.pixel,
+        pass.window,
+        line.jitter,
+        Reader::Lines,
+    );
     let cam = ldi.camera;
     let opaque = |t: usize| pscene.glazing_tf[t].max_element() <= 0.0;
     let mut panes: Vec<Fragment> = Vec::new();

@@ -47,8 +47,9 @@ const TAG_VALUES: u32 = FIRST_USER_TAG;
 /// copy of what its direction record yields: a warm run then reads no direction record
 /// (a large scene's projection leaves are megabytes each).
 const TAG_DIRECT: u32 = FIRST_USER_TAG + 1;
-/// Version of what a coefficient record holds, hashed into its key.
-const COEFFICIENTS_VERSION: u32 = 4;
+/// Version of what a coefficient record holds, hashed into its key (5: made from
+/// direction records of [`super::directions::DIRECTIONS_VERSION`] 2).
+const COEFFICIENTS_VERSION: u32 = 5;
 /// Direct rows per node: 4 child responses, their sum, 4 uncertainties.
 const DIRECT_ROWS: usize = 9;
 /// Adjoint responses held at once without a memory cap, bytes: beyond it, larger blocks

@@ -20,6 +20,11 @@ use std::collections::{HashMap, HashSet};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
+/// Version of what a direction record holds, hashed into its key. 2: a source's LDI keeps
+/// one face of a two-sided surface ([`projection::Reader::Source`]), so where two faces
+/// meet at a pixel's line, one turned away from the source no longer hides the other.
+pub(crate) const DIRECTIONS_VERSION: u32 = 2;
+
 /// Section tag of a sky or ground node's per-sensor responses: 16 f64 per sensor (4
 /// children × RGB, then 4 uncertainties). Suns use [`TAG_SUN_SENSORS`]; in memory a sun's
 /// child 0 holds the transmission and child 1's first value is 1 when the ray crossed
@@ -120,6 +125,7 @@ impl<'a> Directions<'a> {
             // Records without projections must not serve a run that reads them.
             extra.extend_from_slice(b"sensors only");
         }
+        extra.extend_from_slice(&DIRECTIONS_VERSION.to_le_bytes());
         extra.extend_from_slice(&s.visibility_depth.to_le_bytes());
         extra.extend_from_slice(&s.visibility_tolerance.to_bits().to_le_bytes());
         extra.extend_from_slice(&s.sample_angle_deg.to_bits().to_le_bytes());

@@ -38,7 +38,7 @@ fn once(scene: &Scene, spec: &SkySpec, q: &Quality) -> (InstantResult, f64) {
     (r, t0.elapsed().as_secs_f64())
 }
 
-fn bench_scene(name: &str, scene: &Scene, runs: usize) {
+fn bench_scene(name: &str, scene: &Scene, runs: usize, args: &Args) {
     let spec = SkySpec::Perez {
         dni: 750.0,
         dhi: 110.0,
@@ -90,7 +90,9 @@ fn bench_scene(name: &str, scene: &Scene, runs: usize) {
         "sun + sky shoot (sources + projection + transfer), last run: {shoot:.3} s; peak RSS of these default runs {:.0} MB",
         peak_rss_mb()
     );
-    ladder(name, scene, &spec);
+    if !args.no_ladder {
+        ladder(name, scene, &spec);
+    }
 }
 
 /// Error against time: each preset against `reference`, on at most ~170 sensors (the
@@ -142,13 +144,45 @@ fn ladder(name: &str, scene: &Scene, spec: &SkySpec) {
     );
 }
 
+/// Command-line choices: `--no-ladder` skips the presets' error-against-time runs, and
+/// `--only TEXT` (repeatable) runs only the scenes whose name contains one of the texts.
+struct Args {
+    no_ladder: bool,
+    only: Vec<String>,
+}
+
+impl Args {
+    fn parse() -> Args {
+        let mut args = Args {
+            no_ladder: false,
+            only: Vec::new(),
+        };
+        let mut it = std::env::args().skip(1);
+        while let Some(a) = it.next() {
+            match a.as_str() {
+                "--no-ladder" => args.no_ladder = true,
+                "--only" => args.only.extend(it.next()),
+                _ => {} // cargo bench passes `--bench`
+            }
+        }
+        args
+    }
+
+    fn wants(&self, name: &str) -> bool {
+        self.only.is_empty() || self.only.iter().any(|o| name.contains(o.as_str()))
+    }
+}
+
 fn main() {
+    let args = Args::parse();
     let threads = rayon::current_num_threads();
     println!("# daystep instant benchmark ({threads} threads)");
-    let office =
-        Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office/scene.toml"))
-            .unwrap();
-    bench_scene("sample office", &office, 5);
+    if args.wants("sample office") {
+        let office =
+            Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office/scene.toml"))
+                .unwrap();
+        bench_scene("sample office", &office, 5, &args);
+    }
     for (name, site) in [
         (
             "office on a 1 km ground",
@@ -159,10 +193,14 @@ fn main() {
             scenes::OfficeSite::ContextRing,
         ),
     ] {
-        let scene = scenes::office_on_site(site).build(name).unwrap();
-        bench_scene(name, &scene, 3);
+        if args.wants(name) {
+            let scene = scenes::office_on_site(site).build(name).unwrap();
+            bench_scene(name, &scene, 3, &args);
+        }
     }
-    let building = scenes::multi_storey_building(10_000);
-    bench_scene("generated building", &building, 3);
+    if args.wants("generated building") {
+        let building = scenes::multi_storey_building(10_000);
+        bench_scene("generated building", &building, 3, &args);
+    }
     println!("\npeak RSS of the whole benchmark: {:.0} MB", peak_rss_mb());
 }
