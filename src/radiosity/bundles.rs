@@ -182,6 +182,11 @@ fn bundle(
     };
     // Links whose receiver this pass does not serve are dropped here.
     let mut local = Links::default();
+    // Where each pixel's line is inside the pass's window box (grown by a margin far
+    // above a fragment's f32 rounding). A fragment outside it lies on no element the
+    // pass serves (those lie inside the box), so it is counted for no row and receives
+    // no kept link: its row is found only when it sends a link to one inside.
+    let inside = Inside::new(&cam, pass.window, pass.rows.is_some());
     for j in 0..cam.height {
         for i in 0..cam.width {
             let list = ldi.pixel(i, j);
@@ -191,42 +196,63 @@ fn bundle(
             let x = cam.origin.x + (i as f64 + 0.5) * cam.pixel;
             let y = cam.origin.y + (j as f64 + 0.5) * cam.pixel;
             let base = cam.u * x + cam.v * y;
-            // (row, faces the source side) of the last opaque fragment, τ since.
-            let mut prev: Option<(u32, bool)> = None;
+            let span = inside.span(base);
+            // The last two opaque fragments, each with its row once found: (fragment,
+            // row, faces the source side, lies in the box). τ since the last.
+            let mut prev: Option<(Fragment, Option<u32>, bool, bool)> = None;
+            let mut before_prev: Option<(Fragment, Option<u32>)> = None;
             let mut tau = Rgb::ONE;
             // Glazing fragments since the last opaque one (triangle, height).
             panes.clear();
-            // A back face's row, from its front's just before it (same point, mirrored
-            // quadtree path): saves the descent.
-            let mut last: Option<(u32, u32)> = None;
+            let descend = |fr: &Fragment| {
+                let p = base + d * fr.height as f64;
+                mesh.row_at(fr.tri, barycentric(pscene.vertices[fr.tri as usize], p))
+            };
+            let is_twin = |a: &Fragment, b: &Fragment| {
+                pscene.twin.get(a.tri as usize).is_some_and(|&w| w == b.tri)
+            };
+            // A fragment's row given the opaque one before it: a back face's row from
+            // its front's just before it (same point, mirrored quadtree path) saves the
+            // descent. Found only when needed, the same rows as finding every one: a
+            // face's twin is never also the twin of the fragment before that.
+            let row_after = |fr: &Fragment, before: Option<(Fragment, Option<u32>)>| {
+                match before {
+                    Some((bf, br)) if is_twin(fr, &bf) => {
+                        mesh.twin_row(br.unwrap_or_else(|| descend(&bf)))
+                    }
+                    _ => None,
+                }
+                .unwrap_or_else(|| descend(fr))
+            };
             for fr in list {
                 let t = fr.tri as usize;
                 if !opaque(t) {
                     // Light from the opaque fragment above (facing down, towards
                     // this pane) reflected back up to it.
-                    if let Some((pr, false)) = prev {
+                    if let Some((_, Some(pr), false, true)) = prev {
                         mirror.link(pr, fr, base, d, tau, &mut local);
                     }
                     tau *= pass_factor[t];
                     panes.push(*fr);
                     continue;
                 }
-                let twin = match last {
-                    Some((lt, lr)) if pscene.twin.get(t).is_some_and(|&w| w == lt) => {
-                        mesh.twin_row(lr)
-                    }
-                    _ => None,
-                };
-                let row = twin.unwrap_or_else(|| {
-                    let p = base + d * fr.height as f64;
-                    mesh.row_at(fr.tri, barycentric(pscene.vertices[t], p))
-                });
-                last = Some((fr.tri, row));
+                let within = span.holds(fr.height);
                 let up = pscene.normals[t].dot(d) > 0.0;
-                if pass.serves(row) {
+                let linked = matches!(prev, Some((_, _, false, p_in)) if up && tau != Rgb::ZERO && (p_in || within));
+                // The previous fragment's row, when this one links to it or is its twin.
+                let prev_row = match prev {
+                    Some((pf, None, _, _)) if linked || (within && is_twin(fr, &pf)) => {
+                        Some(row_after(&pf, before_prev))
+                    }
+                    Some((_, r, _, _)) => r,
+                    None => None,
+                };
+                let row = (within || linked)
+                    .then(|| row_after(fr, prev.map(|(pf, _, _, _)| (pf, prev_row))));
+                if let Some(row) = row.filter(|&r| within && pass.serves(r)) {
                     counts[row as usize] += 1;
                 }
-                if up {
+                if let (true, true, Some(row)) = (up, within, row) {
                     // Light reflected down to this fragment by each pane above it
                     // (up to the previous opaque one), through the panes between.
                     let mut between = Rgb::ONE;
@@ -236,20 +262,76 @@ fn bundle(
                     }
                 }
                 panes.clear();
-                if let Some((pr, p_up)) = prev {
-                    if !p_up && up && tau != Rgb::ZERO {
-                        let q = fixed(tau);
-                        local.push((row as u64) << 32 | pr as u64, q);
-                        local.push((pr as u64) << 32 | row as u64, q);
-                    }
+                if let (true, Some(pr), Some(row)) = (linked, prev_row, row) {
+                    let q = fixed(tau);
+                    local.push((row as u64) << 32 | pr as u64, q);
+                    local.push((pr as u64) << 32 | row as u64, q);
                 }
-                prev = Some((row, up));
+                before_prev = prev.map(|(pf, _, _, _)| (pf, prev_row));
+                prev = Some((*fr, row, up, within));
                 tau = Rgb::ONE;
             }
         }
     }
     local.retain(|k| pass.serves((k >> 32) as u32));
     pairs.extend(local);
+}
+
+/// The part of each pixel's line inside a pass's window box, grown by a margin (10⁻³ of
+/// its diagonal plus 1 mm: far above a fragment's f32 height rounding). `None` when the
+/// pass serves every row (the whole scene): everything is inside.
+struct Inside {
+    box_: Option<(DVec3, DVec3)>,
+    inv_dir: DVec3,
+    margin: f64,
+}
+
+/// The heights (along the bundle direction, m) between which one pixel's line is inside
+/// the box.
+#[derive(Clone, Copy)]
+struct Span {
+    low: f64,
+    high: f64,
+}
+
+impl Span {
+    fn holds(&self, h: f32) -> bool {
+        let h = h as f64;
+        h >= self.low && h <= self.high
+    }
+}
+
+impl Inside {
+    fn new(cam: &crate::projection::Camera, window: (DVec3, DVec3), windowed: bool) -> Inside {
+        let margin = 1e-3 * (window.1 - window.0).length() + 1e-3;
+        Inside {
+            box_: windowed.then(|| {
+                (
+                    window.0 - DVec3::splat(margin),
+                    window.1 + DVec3::splat(margin),
+                )
+            }),
+            inv_dir: cam.dir.recip(),
+            margin,
+        }
+    }
+
+    /// The span of the line `base + dir·h`; an axis the line runs parallel to gives ±inf
+    /// (or NaN in one of the slab's planes, which `max_element`/`min_element` pass over).
+    fn span(&self, base: DVec3) -> Span {
+        let Some((lo, hi)) = self.box_ else {
+            return Span {
+                low: f64::NEG_INFINITY,
+                high: f64::INFINITY,
+            };
+        };
+        let a = (lo - base) * self.inv_dir;
+        let b = (hi - base) * self.inv_dir;
+        Span {
+            low: a.min(b).max_element() - self.margin,
+            high: a.max(b).min_element() + self.margin,
+        }
+    }
 }
 
 /// Fixed-point value of a transmission (or reflection) factor.
