@@ -15,6 +15,20 @@ pub fn rasterize(
     depth: [f64; 3],
     width: u32,
     height: u32,
+    visit: impl FnMut(u32, u32, f64),
+) {
+    rasterize_within(p, depth, width, height, |_| (i64::MIN, i64::MAX), visit);
+}
+
+/// [`rasterize`] visiting, in row `j`, only the pixels `i` with `lo ≤ i ≤ hi` for
+/// `(lo, hi) = span(j)`: the pixels visited and their depths are those [`rasterize`]
+/// visits there, to the bit.
+pub fn rasterize_within(
+    p: [DVec2; 3],
+    depth: [f64; 3],
+    width: u32,
+    height: u32,
+    span: impl Fn(u32) -> (i64, i64),
     mut visit: impl FnMut(u32, u32, f64),
 ) {
     let area2 = (p[1] - p[0]).perp_dot(p[2] - p[0]);
@@ -71,6 +85,8 @@ pub fn rasterize(
                 ((hi_x + 0.5).ceil().min(i1 as f64) as i64).max(i0 - 1),
             )
         };
+        let (keep_lo, keep_hi) = span(j as u32);
+        let (start, end) = (start.max(keep_lo), end.min(keep_hi));
         let mut entered = false;
         for i in start..=end {
             let c = DVec2::new(i as f64 + 0.5, y);

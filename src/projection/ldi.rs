@@ -7,6 +7,7 @@
 //! a fragment is then 8 bytes instead of 20, and the LDIs in flight were a cold annual
 //! run's largest allocations on a building with few sensors.
 
+use super::clip::Clip;
 use super::ProjectionScene;
 use crate::math::{frame, raster};
 use crate::photometry::Rgb;
@@ -140,7 +141,9 @@ fn order_coincident_facing(
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Reader {
     /// Global lines: every fragment, both faces of a two-sided surface (each face is
-    /// linked with what it sees on its own side).
+    /// linked with what it sees on its own side), of every line that meets the window box
+    /// (grown by three [`window_margin`]s): a line that misses it crosses none of the rows
+    /// its pass serves.
     Lines,
     /// A source's projection, whose pixels are read for the elements inside its window
     /// box (or the whole scene) and what lies in front of them. It drops two kinds of
@@ -156,9 +159,9 @@ pub enum Reader {
     /// * those beyond the window box along the line (below where the line leaves it, by
     ///   more than a margin), and every fragment of a pixel whose line misses the box: no
     ///   element refined against this image lies there, and they are behind everything
-    ///   that does. Exact: the records are those of [`Reader::SourceUncut`] to the bit.
-    ///   A site's ground seen past a window's edges was most of a windowed image's
-    ///   fragments.
+    ///   that does. Scan conversion skips them row by row (`clip.rs`). Exact: the records
+    ///   are those of [`Reader::SourceUncut`] to the bit. A site's ground seen past a
+    ///   window's edges was most of a windowed image's fragments.
     Source,
     /// [`Reader::Source`] without the cut beyond the window box: for the check that the
     /// cut drops no fragment its refinement reads (the records must be the same to the
@@ -177,76 +180,13 @@ pub struct Ldi {
     pass: Vec<Rgb>,
 }
 
-/// Where a source's projection stops reading along each pixel's line ([`Reader::Source`]):
-/// the height (along the source direction, m) at which the line leaves the window box on
-/// the side away from the source, less a margin.
-struct Beyond {
-    /// The line of pixel (i, j) is `base + u·(i·pixel) + v·(j·pixel) + dir·h`.
-    base: DVec3,
-    step_u: DVec3,
-    step_v: DVec3,
-    inv_dir: DVec3,
-    lo: DVec3,
-    hi: DVec3,
-    margin: f64,
-    /// Whether anything is dropped.
-    active: bool,
-}
-
-impl Beyond {
-    fn nothing() -> Beyond {
-        Beyond {
-            base: DVec3::ZERO,
-            step_u: DVec3::ZERO,
-            step_v: DVec3::ZERO,
-            inv_dir: DVec3::ZERO,
-            lo: DVec3::ZERO,
-            hi: DVec3::ZERO,
-            margin: 0.0,
-            active: false,
-        }
-    }
-
-    /// The box `w` (scene frame, m) seen by `camera`, grown by a margin: a pixel, plus
-    /// 10⁻³ of the box's diagonal and 1 mm. The pixel covers a point read off its
-    /// pixel's centre line (an element too small to cover a pixel centre is read at the
-    /// pixel holding its centroid, up to 0.71 pixel from it); the rest is far above the
-    /// rounding of a fragment's f32 height and [`COINCIDENT_M`], so every fragment inside
-    /// the box, and every fragment a run of coincident ones inside it could be ordered
-    /// against, is kept.
-    fn new(camera: &Camera, w: (DVec3, DVec3)) -> Beyond {
-        let c = camera;
-        Beyond {
-            base: c.u * (c.origin.x + 0.5 * c.pixel) + c.v * (c.origin.y + 0.5 * c.pixel),
-            step_u: c.u * c.pixel,
-            step_v: c.v * c.pixel,
-            inv_dir: c.dir.recip(),
-            lo: w.0,
-            hi: w.1,
-            margin: 1e-3 * (w.1 - w.0).length() + 1e-3 + c.pixel,
-            active: true,
-        }
-    }
-
-    /// Whether the fragment at height `z` of pixel (i, j) lies beyond the box, or the
-    /// pixel's line misses the box.
-    fn drops(&self, i: u32, j: u32, z: f64) -> bool {
-        if !self.active {
-            return false;
-        }
-        let o = self.base + self.step_u * i as f64 + self.step_v * j as f64;
-        // Slabs, growing the box by the margin: the line o + dir·t is inside for t in
-        // [t_low, t_high].
-        let lo = (self.lo - DVec3::splat(self.margin) - o) * self.inv_dir;
-        let hi = (self.hi + DVec3::splat(self.margin) - o) * self.inv_dir;
-        let (near, far) = (lo.min(hi), lo.max(hi));
-        // An axis the line runs parallel to gives ±inf at both ends, or NaN where the
-        // line lies in one of the slab's planes; `max_element` and `min_element` pass
-        // over NaN, which takes that axis as inside (the fragment is kept).
-        let t_low = near.max_element();
-        let t_high = far.min_element();
-        t_low > t_high || z < t_low - self.margin
-    }
+/// The margin a window box is grown by before it decides which fragments lie in it
+/// (m): 10⁻³ of its diagonal plus 1 mm, far above the rounding of a fragment's f32
+/// height. A line pass of the interreflection's operator counts a fragment for its
+/// window's rows only within it; its LDI skips lines that miss the box grown by three
+/// times it, which no such fragment lies on.
+pub fn window_margin(w: (DVec3, DVec3)) -> f64 {
+    1e-3 * (w.1 - w.0).length() + 1e-3
 }
 
 impl Ldi {
@@ -390,9 +330,19 @@ impl Ldi {
                 (Reader::Lines, _) => [Some(k as u32), back],
             }
         };
-        let beyond = match (reader, window) {
-            (Reader::Source, Some(w)) => Beyond::new(&camera, w),
-            _ => Beyond::nothing(),
+        // A source's LDI: the box grown by a pixel besides the margin, since an element
+        // too small to cover a pixel centre is read at the pixel holding its centroid, up
+        // to 0.71 pixel from it.
+        let clip = match (reader, window) {
+            (Reader::Source, Some(w)) => {
+                let m = window_margin(w) + pixel;
+                Some(Clip::new(&camera, w.0 - m, w.1 + m, Some(m)))
+            }
+            (Reader::Lines, Some(w)) => {
+                let m = 3.0 * window_margin(w);
+                Some(Clip::new(&camera, w.0 - m, w.1 + m, None))
+            }
+            _ => None,
         };
         let mut counts = vec![0u32; n_pix + 1];
         let mut staged: Vec<(u32, f32)> = Vec::new();
@@ -401,14 +351,17 @@ impl Ldi {
             if !scene.is_back_face(k) {
                 let faces = kept(k).iter().flatten().count() as u32;
                 let (p, h) = project(t);
-                raster::rasterize(p, h, width, height, |i, j, z| {
-                    if beyond.drops(i, j, z) {
-                        return;
-                    }
+                let stage = |i: u32, j: u32, z: f64| {
                     let px = j as usize * width as usize + i as usize;
                     counts[px] += faces;
                     staged.push((px as u32, z as f32));
-                });
+                };
+                match clip.filter(|c| !c.holds(t)) {
+                    Some(c) => {
+                        raster::rasterize_within(p, h, width, height, |j| c.row(&p, &h, j), stage)
+                    }
+                    None => raster::rasterize(p, h, width, height, stage),
+                }
             }
             ends[k] = staged.len();
         }

@@ -6,6 +6,7 @@
 //! is not modelled (the interreflection, `radiosity::transport`, reflects light coming
 //! from surfaces).
 
+mod clip;
 pub mod ldi;
 pub mod refine;
 

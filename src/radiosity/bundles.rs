@@ -277,9 +277,10 @@ fn bundle(
     pairs.extend(local);
 }
 
-/// The part of each pixel's line inside a pass's window box, grown by a margin (10⁻³ of
-/// its diagonal plus 1 mm: far above a fragment's f32 height rounding). `None` when the
-/// pass serves every row (the whole scene): everything is inside.
+/// The part of each pixel's line inside a pass's window box, grown by
+/// [`crate::projection::ldi::window_margin`] (far above a fragment's f32 height rounding).
+/// `box_` is `None` when the pass serves every row (the whole scene): everything is
+/// inside.
 struct Inside {
     box_: Option<(DVec3, DVec3)>,
     inv_dir: DVec3,
@@ -303,7 +304,7 @@ impl Span {
 
 impl Inside {
     fn new(cam: &crate::projection::Camera, window: (DVec3, DVec3), windowed: bool) -> Inside {
-        let margin = 1e-3 * (window.1 - window.0).length() + 1e-3;
+        let margin = crate::projection::ldi::window_margin(window);
         Inside {
             box_: windowed.then(|| {
                 (
