@@ -357,6 +357,36 @@ fn daystep(scene: &Path, weather: &Path, period: Period, cache: &Path, out: &Pat
     }
 }
 
+/// A cold year of the scene `name` into the empty `cache`, then a warm one from it, each
+/// into its own folder under `tmp`.
+fn cold_and_warm(
+    name: &str,
+    scene: &Path,
+    weather: &Path,
+    period: Period,
+    cache: &Path,
+    tmp: &Path,
+) -> (DsRun, DsRun) {
+    eprintln!("{name}: daystep cold …");
+    let cold = daystep(
+        scene,
+        weather,
+        period,
+        cache,
+        &tmp.join(format!("{name}-cold")),
+    );
+    eprintln!("{name}: daystep cold {:.1} s; warm …", cold.wall_s);
+    let warm = daystep(
+        scene,
+        weather,
+        period,
+        cache,
+        &tmp.join(format!("{name}-warm")),
+    );
+    eprintln!("{name}: daystep warm {:.1} s", warm.wall_s);
+    (cold, warm)
+}
+
 // ---------------------------------------------------------------------------------------
 // Scenes
 // ---------------------------------------------------------------------------------------
@@ -486,23 +516,7 @@ fn compare(root: &Path, o: &Opts, work: &Path, tmp: &Path) {
     for (name, toml) in &list {
         let cache = tmp.join(format!("cache-{name}"));
         let _ = std::fs::remove_dir_all(&cache);
-        eprintln!("{name}: daystep cold …");
-        let cold = daystep(
-            toml,
-            &epw,
-            period,
-            &cache,
-            &tmp.join(format!("{name}-cold")),
-        );
-        eprintln!("{name}: daystep cold {:.1} s; warm …", cold.wall_s);
-        let warm = daystep(
-            toml,
-            &epw,
-            period,
-            &cache,
-            &tmp.join(format!("{name}-warm")),
-        );
-        eprintln!("{name}: daystep warm {:.1} s", warm.wall_s);
+        let (cold, warm) = cold_and_warm(name, toml, &epw, period, &cache, tmp);
         let rad = py.as_ref().map(|py| {
             eprintln!("{name}: Radiance 2-phase …");
             radiance(

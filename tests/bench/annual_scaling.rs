@@ -38,23 +38,7 @@ pub(super) fn scaling(root: &Path, o: &Opts, work: &Path, tmp: &Path) {
         let scene = with_sensor_grid(scenes::multi_storey_building(tris), sensors);
         let toml = write_scene(&scene, &work.join("scenes").join(&name), "building");
         let cache = tmp.join(format!("cache-{name}"));
-        eprintln!("{name}: cold …");
-        let cold = daystep(
-            &toml,
-            &epw,
-            period,
-            &cache,
-            &tmp.join(format!("{name}-cold")),
-        );
-        eprintln!("{name}: cold {:.1} s; warm …", cold.wall_s);
-        let warm = daystep(
-            &toml,
-            &epw,
-            period,
-            &cache,
-            &tmp.join(format!("{name}-warm")),
-        );
-        eprintln!("{name}: warm {:.1} s", warm.wall_s);
+        let (cold, warm) = cold_and_warm(&name, &toml, &epw, period, &cache, tmp);
         let _ = std::fs::remove_dir_all(&cache);
         points.push(Point {
             sweep,
