@@ -67,9 +67,9 @@ impl Clip {
             .all(|p| p.cmpge(self.lo).all() && p.cmple(self.hi).all())
     }
 
-    /// The span `(first, last)` of row `j`'s needed pixels for the triangle projected to
-    /// pixel coordinates `p` with heights `h` (empty when `first > last`).
-    pub(super) fn row(&self, p: &[DVec2; 3], h: &[f64; 3], j: u32) -> (i64, i64) {
+    /// The span `(first, last)` of row `j`'s needed pixels for a triangle of `plane`
+    /// ([`Plane::of`]; `None`: no area) (empty when `first > last`).
+    pub(super) fn row(&self, plane: Option<&Plane>, j: u32) -> (i64, i64) {
         let o0 = self.base + self.step_v * j as f64;
         let mut conds: [Affine; 16] = [Affine {
             alpha: 0.0,
@@ -111,7 +111,7 @@ impl Clip {
             }
         }
         if let Some(m) = self.beyond {
-            if let Some(z) = plane_row(p, h, j) {
+            if let Some(z) = plane.map(|pl| pl.row(j)) {
                 for nr in near.iter().flatten() {
                     let mut c = z.minus(*nr);
                     c.alpha += m;
@@ -137,22 +137,42 @@ impl Clip {
     }
 }
 
-/// The triangle's height at pixel (i + ½, j + ½) as an affine function of i, for row `j`;
-/// `None` for a triangle of no area in the image (which covers no pixel).
-fn plane_row(p: &[DVec2; 3], h: &[f64; 3], j: u32) -> Option<Affine> {
-    let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
-    let det = e1.perp_dot(e2);
-    if det == 0.0 || !det.is_finite() {
-        return None;
+/// A triangle's plane in its LDI: heights (m) from its first projected vertex and the
+/// gradient over pixel coordinates, found once per triangle.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Plane {
+    p0: DVec2,
+    h0: f64,
+    gx: f64,
+    gy: f64,
+}
+
+impl Plane {
+    /// The plane of the triangle projected to pixel coordinates `p` with heights `h`;
+    /// `None` for a triangle of no area in the image (which covers no pixel).
+    pub(super) fn of(p: &[DVec2; 3], h: &[f64; 3]) -> Option<Plane> {
+        let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
+        let det = e1.perp_dot(e2);
+        if det == 0.0 || !det.is_finite() {
+            return None;
+        }
+        let (d1, d2) = (h[1] - h[0], h[2] - h[0]);
+        Some(Plane {
+            p0: p[0],
+            h0: h[0],
+            gx: (d1 * e2.y - d2 * e1.y) / det,
+            gy: (d2 * e1.x - d1 * e2.x) / det,
+        })
     }
-    let (d1, d2) = (h[1] - h[0], h[2] - h[0]);
-    let gx = (d1 * e2.y - d2 * e1.y) / det;
-    let gy = (d2 * e1.x - d1 * e2.x) / det;
-    let y = j as f64 + 0.5;
-    Some(Affine {
-        alpha: h[0] + gx * (0.5 - p[0].x) + gy * (y - p[0].y),
-        beta: gx,
-    })
+
+    /// The height at pixel (i + ½, j + ½) as an affine function of i, for row `j`.
+    fn row(&self, j: u32) -> Affine {
+        let y = j as f64 + 0.5;
+        Affine {
+            alpha: self.h0 + self.gx * (0.5 - self.p0.x) + self.gy * (y - self.p0.y),
+            beta: self.gx,
+        }
+    }
 }
 
 #[cfg(test)]
@@ -233,13 +253,14 @@ mod tests {
                     };
                     let p = tri.map(|x| cam.to_pixel(x));
                     let h = tri.map(|x| cam.height_of(x));
+                    let plane = Plane::of(&p, &h);
                     let mut inside = Vec::new();
                     rasterize_within(
                         p,
                         h,
                         cam.width,
                         cam.height,
-                        |j| clip.row(&p, &h, j),
+                        |j| clip.row(plane.as_ref(), j),
                         |i, j, z| inside.push((i, j, z.to_bits())),
                     );
                     let mut all = Vec::new();

@@ -7,7 +7,7 @@
 //! a fragment is then 8 bytes instead of 20, and the LDIs in flight were a cold annual
 //! run's largest allocations on a building with few sensors.
 
-use super::clip::Clip;
+use super::clip::{Clip, Plane};
 use super::ProjectionScene;
 use crate::math::{frame, raster};
 use crate::photometry::Rgb;
@@ -358,7 +358,15 @@ impl Ldi {
                 };
                 match clip.filter(|c| !c.holds(t)) {
                     Some(c) => {
-                        raster::rasterize_within(p, h, width, height, |j| c.row(&p, &h, j), stage)
+                        let plane = Plane::of(&p, &h);
+                        raster::rasterize_within(
+                            p,
+                            h,
+                            width,
+                            height,
+                            |j| c.row(plane.as_ref(), j),
+                            stage,
+                        )
                     }
                     None => raster::rasterize(p, h, width, height, stage),
                 }
