@@ -556,6 +556,17 @@ impl MappedRecord {
         }
     }
 
+    /// [`Self::release`] for the pages that hold bytes `range` of the record (and the
+    /// neighbouring bytes on their first and last page): for a large array read once in
+    /// order, so that only the part still to be read can stay resident.
+    pub fn release_range(&self, range: std::ops::Range<usize>) {
+        if let Backing::Map(m) = &self.data {
+            if range.start < range.end && range.end <= m.len() {
+                release_map_range(m, range);
+            }
+        }
+    }
+
     /// True when backed by a memory-mapped file.
     pub fn is_mapped(&self) -> bool {
         matches!(self.data, Backing::Map(_))
@@ -595,6 +606,26 @@ impl MappedRecord {
 /// Unix, nothing (the pages stay resident).
 #[cfg(not(unix))]
 fn release_map(_map: &memmap2::Mmap) {}
+
+/// ... on bytes `range` of it ([`MappedRecord::release_range`]).
+#[cfg(not(unix))]
+fn release_map_range(_map: &memmap2::Mmap, _range: std::ops::Range<usize>) {}
+
+/// `MADV_DONTNEED` on bytes `range` of a read-only file map, widened to whole pages
+/// ([`MappedRecord::release_range`]).
+#[cfg(unix)]
+#[allow(unsafe_code)]
+fn release_map_range(map: &memmap2::Mmap, range: std::ops::Range<usize>) {
+    // SAFETY: as in `release_map`: a read-only shared map of a file never changed in
+    // place, so a discarded page reads back the same bytes.
+    let _ = unsafe {
+        map.unchecked_advise_range(
+            memmap2::UncheckedAdvice::DontNeed,
+            range.start,
+            range.end - range.start,
+        )
+    };
+}
 
 /// `MADV_DONTNEED` on a read-only file map ([`MappedRecord::release`]).
 #[cfg(unix)]

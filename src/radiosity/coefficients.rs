@@ -129,7 +129,9 @@ impl Transport {
 
     /// Bytes the solves take beside the held responses with `threads` solving: one
     /// transposed operator (column and values per entry), and per thread a sub-block's f32
-    /// responses and their start (twice rows × channels × [`BLOCK`] × 4 bytes).
+    /// responses and their right-hand side (rows × channels × [`BLOCK`] × 4 bytes each; the
+    /// right-hand side is held only at the rows the sub-block's gathers reach, so this is
+    /// its bound).
     pub fn adjoint_scratch_bytes(&self, threads: usize) -> u64 {
         let ch = self.adjoint_channels() as u64;
         let entries = self.parts.iter().map(|p| p.f.cols.len()).max().unwrap_or(0) as u64;

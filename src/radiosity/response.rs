@@ -248,6 +248,10 @@ impl Transport {
     }
 }
 
+/// Entries of an operator read between two givings-back of their pages while it is
+/// transposed ([`Adjoint::of`]): 4 MB of columns.
+const RELEASE_ENTRIES: usize = 1 << 20;
+
 /// One part and level's adjoint operator: Fᵀ with ρ of the source row folded in, as the
 /// adjoint's Gauss–Seidel reads it (row i lists (k, ρ_k F_ki), `channels` values per
 /// entry). Made once and shared by every block of sensors solved against it: the
@@ -262,11 +266,68 @@ pub(super) struct Adjoint {
     rho_max: f64,
 }
 
+/// The right-hand side of a block's adjoint systems, Gᵀ, at the rows where it is not all
+/// zero: `rows` ascending, and each one's channels × width values in `vals`, as the dense
+/// rows × channels × width array would hold them (the same sums in the same order).
+struct Rhs {
+    rows: Vec<u32>,
+    vals: Vec<f32>,
+}
+
+impl Rhs {
+    /// Gᵀ of gather `g` for the sensors `range`, `ch` values per entry.
+    fn of(g: &super::sparse::View, range: std::ops::Range<usize>, ch: usize) -> Rhs {
+        let w = range.len();
+        let span = ch * w;
+        // (row, place in the row, value) in the order the dense sums took them; a stable
+        // sort by row keeps that order within each place.
+        let mut entries: Vec<(u32, u32, f32)> = Vec::new();
+        for (j, s) in range.enumerate() {
+            for e in g.offsets[s] as usize..g.offsets[s + 1] as usize {
+                let v = g.val(e);
+                for (c, &vc) in v.iter().enumerate().take(ch) {
+                    entries.push((g.cols[e], (c * w + j) as u32, vc));
+                }
+            }
+        }
+        entries.sort_by_key(|e| e.0);
+        let mut rows: Vec<u32> = Vec::new();
+        let mut vals: Vec<f32> = Vec::new();
+        for (r, at, v) in entries {
+            if rows.last() != Some(&r) {
+                rows.push(r);
+                vals.resize(vals.len() + span, 0.0);
+            }
+            let base = vals.len() - span;
+            vals[base + at as usize] += v;
+        }
+        Rhs { rows, vals }
+    }
+
+    /// Where a sweep starts reading it ([`Self::row`]).
+    fn start(&self) -> usize {
+        0
+    }
+
+    /// Row `i`'s values (`span` of them), or `None` where it is all zero; rows are asked
+    /// for in ascending order, `at` keeping the place.
+    #[inline(always)]
+    fn row(&self, at: &mut usize, i: usize, span: usize) -> Option<&[f32]> {
+        if self.rows.get(*at).is_some_and(|&r| r as usize == i) {
+            let v = &self.vals[*at * span..(*at + 1) * span];
+            *at += 1;
+            Some(v)
+        } else {
+            None
+        }
+    }
+}
+
 impl Adjoint {
     /// The adjoint of operator `f` with reflectances `rho`, keeping `channels` values per
     /// entry.
-    pub(super) fn of(f: &Sparse, rho: &[Rgb], channels: usize) -> Adjoint {
-        let f = f.view();
+    pub(super) fn of(f_in: &Sparse, rho: &[Rgb], channels: usize) -> Adjoint {
+        let f = f_in.view();
         let n = f.rows();
         let ch = channels;
         let mut count = vec![0u32; n + 1];
@@ -280,7 +341,15 @@ impl Adjoint {
         let mut cols = vec![0u32; f.cols.len()];
         // `ch` values per entry: a grey block keeps one.
         let mut vals = vec![0f32; ch * f.cols.len()];
+        // The entries are read once, in order: where they are read in place, what has been
+        // read goes back to the kernel as the pass goes, so that F and its transpose are
+        // not resident together (on the corridor building, 35 MB at the solves' peak).
+        let mut released = 0usize;
         for (kr, (&r, w)) in rho.iter().zip(f.offsets.windows(2)).enumerate() {
+            if w[0] as usize - released >= RELEASE_ENTRIES {
+                f_in.release_entries(released..w[0] as usize);
+                released = w[0] as usize;
+            }
             for e in w[0] as usize..w[1] as usize {
                 let i = f.cols[e] as usize;
                 let at = fill[i] as usize;
@@ -323,19 +392,16 @@ impl Adjoint {
         if w == 0 || n == 0 {
             return (vec![0.0; n * ch * w], 0);
         }
-        // Gᵀ for the block: x starts at it.
-        let mut gt = vec![0f32; n * ch * w];
-        for (j, s) in range.clone().enumerate() {
-            for e in g.offsets[s] as usize..g.offsets[s + 1] as usize {
-                let r = g.cols[e] as usize;
-                let v = g.val(e);
-                for c in 0..ch {
-                    gt[(r * ch + c) * w + j] += v[c];
-                }
-            }
+        // Gᵀ for the block, kept only at the rows some sensor's gather reaches (a dense
+        // copy was a second rows × channels × width array per thread beside X); x starts
+        // at it.
+        let gt = Rhs::of(&g, range, ch);
+        let g_max = gt.vals.iter().fold(0f32, |a, v| a.max(v.abs()));
+        let mut x = vec![0f32; n * ch * w];
+        let span = ch * w;
+        for (&r, v) in gt.rows.iter().zip(gt.vals.chunks_exact(span)) {
+            x[r as usize * span..(r as usize + 1) * span].copy_from_slice(v);
         }
-        let g_max = gt.iter().fold(0f32, |a, v| a.max(v.abs()));
-        let mut x = gt.clone();
         if g_max == 0.0 {
             return (x, 0);
         }
@@ -362,7 +428,7 @@ impl Adjoint {
     /// largest relative change of a row (below `floor` absolute). Built for AVX2 where
     /// the CPU has it: the same operations in the same order, so bit-identical.
     #[allow(unsafe_code)] // calling the AVX2 build once the CPU is known to have AVX2
-    fn sweep(&self, gt: &[f32], x: &mut [f32], new: &mut [f32], w: usize, floor: f32) -> f64 {
+    fn sweep(&self, gt: &Rhs, x: &mut [f32], new: &mut [f32], w: usize, floor: f32) -> f64 {
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2, checked just above.
@@ -373,12 +439,12 @@ impl Adjoint {
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn sweep_avx2(&self, gt: &[f32], x: &mut [f32], new: &mut [f32], w: usize, floor: f32) -> f64 {
+    fn sweep_avx2(&self, gt: &Rhs, x: &mut [f32], new: &mut [f32], w: usize, floor: f32) -> f64 {
         self.sweep_any(gt, x, new, w, floor)
     }
 
     #[inline(always)]
-    fn sweep_any(&self, gt: &[f32], x: &mut [f32], new: &mut [f32], w: usize, floor: f32) -> f64 {
+    fn sweep_any(&self, gt: &Rhs, x: &mut [f32], new: &mut [f32], w: usize, floor: f32) -> f64 {
         match (self.channels, w) {
             (1, BLOCK) => return self.sweep_block::<1>(gt, x, floor),
             (3, BLOCK) => return self.sweep_block::<3>(gt, x, floor),
@@ -389,8 +455,12 @@ impl Adjoint {
         let (count, cols, vals) = (&self.count, &self.cols, &self.vals);
         let span = ch * w;
         let mut change = 0f64;
+        let mut at = gt.start();
         for i in 0..n {
-            new.copy_from_slice(&gt[i * span..(i + 1) * span]);
+            match gt.row(&mut at, i, span) {
+                Some(g) => new.copy_from_slice(g),
+                None => new.fill(0.0),
+            }
             for e in count[i] as usize..count[i + 1] as usize {
                 let src = cols[e] as usize * span;
                 let v = &vals[e * ch..(e + 1) * ch];
@@ -425,8 +495,8 @@ impl Adjoint {
     /// the rows ahead made it slower, and was left out). The same operations in the same
     /// order, so bit-identical.
     #[inline(always)]
-    fn sweep_block<const CH: usize>(&self, gt: &[f32], x: &mut [f32], floor: f32) -> f64 {
-        // Row `r` of a one-channel-wide view of X or `gt`, at its fixed width.
+    fn sweep_block<const CH: usize>(&self, gt: &Rhs, x: &mut [f32], floor: f32) -> f64 {
+        // Row `r` of a one-channel-wide view of X or of a row of `gt`, at its fixed width.
         fn row(v: &[f32], r: usize) -> &[f32; BLOCK] {
             v[r * BLOCK..(r + 1) * BLOCK]
                 .try_into()
@@ -435,9 +505,15 @@ impl Adjoint {
         let (count, cols, vals) = (&self.count, &self.cols, &self.vals);
         let mut change = 0f64;
         let mut new = [[0f32; BLOCK]; CH];
+        let mut at = gt.start();
         for i in 0..count.len() - 1 {
-            for (c, n) in new.iter_mut().enumerate() {
-                *n = *row(gt, i * CH + c);
+            match gt.row(&mut at, i, CH * BLOCK) {
+                Some(g) => {
+                    for (c, n) in new.iter_mut().enumerate() {
+                        *n = *row(g, c);
+                    }
+                }
+                None => new = [[0f32; BLOCK]; CH],
             }
             for e in count[i] as usize..count[i + 1] as usize {
                 let k = cols[e] as usize;
@@ -460,5 +536,56 @@ impl Adjoint {
             old.copy_from_slice(new.as_flattened());
         }
         change
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_sparse_right_hand_side_holds_the_dense_sums_bit_for_bit() {
+        // Five sensors' gathers over seven mesh rows, RGB, rows hit two and three times by
+        // one sensor with values of unlike sizes (the sums' order matters to the bits),
+        // rows 2 and 5 reached by none.
+        let offsets = vec![0u32, 2, 5, 5, 9, 10];
+        let cols = vec![0u32, 3, 1, 1, 6, 3, 4, 3, 3, 6];
+        let mut vals: Vec<f32> = (0..cols.len() * 3)
+            .map(|i| (i as f32 * 0.37).sin() * 10f32.powi((i % 7) as i32 - 3))
+            .collect();
+        // Sensor 3's three entries at row 3: 1 + 3e-8 + 3e-8 is 1 in f32 in this order,
+        // not in the reverse one.
+        for (e, v) in [(5, 1.0), (7, 3e-8), (8, 3e-8)] {
+            vals[3 * e..3 * e + 3].fill(v);
+        }
+        let g = Sparse::from_parts(offsets.into(), cols.into(), vals.into(), (5, 7)).unwrap();
+        for ch in [1, 3] {
+            for range in [0..5, 1..4, 2..3] {
+                let (w, span) = (range.len(), ch * range.len());
+                let mut dense = vec![0f32; 7 * span];
+                for (j, s) in range.clone().enumerate() {
+                    let v = g.view();
+                    for e in v.offsets[s] as usize..v.offsets[s + 1] as usize {
+                        for c in 0..ch {
+                            dense[(v.cols[e] as usize * ch + c) * w + j] += v.val(e)[c];
+                        }
+                    }
+                }
+                let rhs = Rhs::of(&g.view(), range.clone(), ch);
+                let mut at = rhs.start();
+                for i in 0..7 {
+                    let want = &dense[i * span..(i + 1) * span];
+                    match rhs.row(&mut at, i, span) {
+                        Some(got) => {
+                            let bits =
+                                |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                            assert_eq!(bits(got), bits(want), "row {i}, {ch} channels, {range:?}");
+                        }
+                        None => assert!(want.iter().all(|&x| x == 0.0), "row {i} dropped"),
+                    }
+                }
+                assert!(rhs.rows.len() < 7, "rows no gather reaches are not held");
+            }
+        }
     }
 }

@@ -68,6 +68,15 @@ impl<T: bytemuck::Pod> Buf<T> {
         })
     }
 
+    /// Gives back the pages of elements `range` when read in place
+    /// ([`MappedRecord::release_range`]); nothing when held.
+    pub fn release_range(&self, range: std::ops::Range<usize>) {
+        if let Buf::Mapped { record, bytes, .. } = self {
+            let size = std::mem::size_of::<T>();
+            record.release_range(bytes.start + range.start * size..bytes.start + range.end * size);
+        }
+    }
+
     /// The record it is read from, if any.
     pub fn record(&self) -> Option<&Arc<MappedRecord>> {
         match self {
@@ -150,6 +159,15 @@ impl Sparse {
             vals: &self.vals,
             rgb: self.rgb,
         }
+    }
+
+    /// Gives back the pages of entries `range` (their columns and values) where they are
+    /// read in place: for one pass over the entries in order, which need not keep what it
+    /// has read resident.
+    pub(super) fn release_entries(&self, range: std::ops::Range<usize>) {
+        self.cols.release_range(range.clone());
+        let per = if self.rgb { 3 } else { 1 };
+        self.vals.release_range(range.start * per..range.end * per);
     }
 
     /// Whether every entry is grey (then stored with one value each).
