@@ -65,7 +65,11 @@ const RELEASE_DAYS: usize = 16;
 /// Directions whose source terms are held at once while coefficients are computed, and
 /// applied together ([`crate::radiosity::AdjointBlock::apply_many`]): a few megabytes of
 /// terms each on the generated building, and the block's responses read once per batch.
-const BATCH: usize = 64;
+/// 32 rather than 64: the batch's terms (held twice, as made and regrouped by row) were
+/// the first block's largest transient; on the corridor building (162 sensors) the cold
+/// year's peak fell by 12–16 MB, at 1.01–1.02× the time there and on building-10k (whose
+/// peak is its held responses and did not move); 16 took no less memory and more time.
+const BATCH: usize = 32;
 
 /// One node's per-sensor data, rows of `sensors` f32 each, held or read in place from
 /// its cache record ([`Buf`]: the steps then keep resident only what recent days read,
