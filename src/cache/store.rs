@@ -538,6 +538,13 @@ mod tests {
             r.f64s(300).unwrap()[values.len() - 1],
             values[values.len() - 1]
         );
+        // Part of it, at ranges that start and end inside pages, empty or beyond its end
+        // (ignored), as a pass over an array read in place gives back what it has read.
+        let n = r.bytes().len();
+        for range in [0..1, 100..5000, 4095..4097, n / 2..n, 7..7, n - 3..n + 10] {
+            r.release_range(range);
+            assert_eq!(r.f64s(300).unwrap(), &values[..]);
+        }
     }
 
     #[test]

@@ -304,13 +304,8 @@ impl Rhs {
         Rhs { rows, vals }
     }
 
-    /// Where a sweep starts reading it ([`Self::row`]).
-    fn start(&self) -> usize {
-        0
-    }
-
     /// Row `i`'s values (`span` of them), or `None` where it is all zero; rows are asked
-    /// for in ascending order, `at` keeping the place.
+    /// for in ascending order, `at` keeping the place (0 at a sweep's start).
     #[inline(always)]
     fn row(&self, at: &mut usize, i: usize, span: usize) -> Option<&[f32]> {
         if self.rows.get(*at).is_some_and(|&r| r as usize == i) {
@@ -455,7 +450,7 @@ impl Adjoint {
         let (count, cols, vals) = (&self.count, &self.cols, &self.vals);
         let span = ch * w;
         let mut change = 0f64;
-        let mut at = gt.start();
+        let mut at = 0;
         for i in 0..n {
             match gt.row(&mut at, i, span) {
                 Some(g) => new.copy_from_slice(g),
@@ -505,7 +500,7 @@ impl Adjoint {
         let (count, cols, vals) = (&self.count, &self.cols, &self.vals);
         let mut change = 0f64;
         let mut new = [[0f32; BLOCK]; CH];
-        let mut at = gt.start();
+        let mut at = 0;
         for i in 0..count.len() - 1 {
             match gt.row(&mut at, i, CH * BLOCK) {
                 Some(g) => {
@@ -572,7 +567,7 @@ mod tests {
                     }
                 }
                 let rhs = Rhs::of(&g.view(), range.clone(), ch);
-                let mut at = rhs.start();
+                let mut at = 0;
                 for i in 0..7 {
                     let want = &dense[i * span..(i + 1) * span];
                     match rhs.row(&mut at, i, span) {
