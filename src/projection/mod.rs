@@ -225,8 +225,9 @@ pub fn project(
 }
 
 /// [`project`] with LDIs holding what `reader` reads: [`Reader::Source`] is what
-/// [`project`] uses; [`Reader::Lines`] keeps every fragment, and must give the same record
-/// to the bit (the check that the fragments a source's LDI drops are never read).
+/// [`project`] uses; [`Reader::SourceUncut`] keeps the fragments beyond the window box too,
+/// and must give the same record to the bit (the check that the fragments the box cut
+/// drops are never read).
 pub fn project_reading(
     scene: &ProjectionScene,
     dir: DVec3,

@@ -367,22 +367,19 @@ fn cold_and_warm(
     cache: &Path,
     tmp: &Path,
 ) -> (DsRun, DsRun) {
+    let run = |kind: &str| {
+        daystep(
+            scene,
+            weather,
+            period,
+            cache,
+            &tmp.join(format!("{name}-{kind}")),
+        )
+    };
     eprintln!("{name}: daystep cold …");
-    let cold = daystep(
-        scene,
-        weather,
-        period,
-        cache,
-        &tmp.join(format!("{name}-cold")),
-    );
+    let cold = run("cold");
     eprintln!("{name}: daystep cold {:.1} s; warm …", cold.wall_s);
-    let warm = daystep(
-        scene,
-        weather,
-        period,
-        cache,
-        &tmp.join(format!("{name}-warm")),
-    );
+    let warm = run("warm");
     eprintln!("{name}: daystep warm {:.1} s", warm.wall_s);
     (cold, warm)
 }
